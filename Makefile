@@ -1,0 +1,31 @@
+# lanemap: the two commands of the README, and what they are made of.
+#   make demo   installs missing Debian packages, builds, simulates a drive and maps it
+#   make test   installs missing Debian packages, builds, runs every test
+BUILD_DIR ?= build
+JOBS ?= $(shell nproc)
+DEMO_OUT ?= demo-out
+
+.PHONY: all deps configure build test demo bench clean
+
+all: build
+
+deps:
+	@scripts/install-deps.sh
+
+configure: deps
+	@cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release > $(BUILD_DIR).configure.log 2>&1 || (cat $(BUILD_DIR).configure.log; exit 1)
+
+build: configure
+	@cmake --build $(BUILD_DIR) -j$(JOBS)
+
+test: build
+	@cd $(BUILD_DIR) && ctest --output-on-failure -j$(JOBS) --timeout 900
+
+demo: build
+	@scripts/demo.sh $(BUILD_DIR) $(DEMO_OUT)
+
+bench: build
+	@tools/bench/run_all.sh $(BUILD_DIR)
+
+clean:
+	rm -rf $(BUILD_DIR) $(BUILD_DIR).configure.log $(DEMO_OUT)

@@ -1,0 +1,194 @@
+#include "processes/framework/process.h"
+
+#include "lanemap/status_t.hpp"
+#include "processes/framework/channels.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <csignal>
+#include <cstdlib>
+#include <ctime>
+#include <iostream>
+#include <stdexcept>
+#include <vector>
+
+namespace lanemap {
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+void onSignal(int) { g_stop.store(true); }
+
+double processCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+std::string hostName() {
+  char buf[256] = {0};
+  if (gethostname(buf, sizeof(buf) - 1) != 0) return "unknown";
+  return buf;
+}
+
+}  // namespace
+
+int64_t nowUtime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+void Counters::add(const std::string& name, int64_t n) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  values_[name] += n;
+}
+
+void Counters::set(const std::string& name, int64_t value) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  values_[name] = value;
+}
+
+int64_t Counters::get(const std::string& name) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = values_.find(name);
+  return it == values_.end() ? 0 : it->second;
+}
+
+std::map<std::string, int64_t> Counters::snapshot() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return values_;
+}
+
+void LatencyWindow::add(double ms) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  samples_.push_back(ms);
+  while (samples_.size() > 500) samples_.pop_front();
+}
+
+double LatencyWindow::percentile(double p) const {
+  std::vector<double> v;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    v.assign(samples_.begin(), samples_.end());
+  }
+  if (v.empty()) return std::nan("");
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::floor(p * (v.size() - 1) + 0.5)));
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return v[k];
+}
+
+std::string resolveLcmUrl(const std::string& flag, const YAML::Node& config) {
+  if (!flag.empty()) return flag;
+  if (config && config["lcm_url"] && !config["lcm_url"].as<std::string>().empty()) {
+    return config["lcm_url"].as<std::string>();
+  }
+  if (const char* env = std::getenv("LCM_DEFAULT_URL"); env && *env) return env;
+  return "";
+}
+
+YAML::Node loadYamlFile(const std::string& path) {
+  try {
+    return YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw std::runtime_error("cannot read config file '" + path + "'");
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error("config file '" + path + "': " + e.what());
+  }
+}
+
+Process::Process(std::string name)
+    : name_(std::move(name)), cli_("lanemap " + name_ + " (an LCM process of lanemap)") {
+  cli_.add_option("-c,--config", config_path_, "YAML config file");
+  cli_.add_option("--lcm-url", lcm_url_flag_,
+                  "LCM URL, e.g. udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608 "
+                  "(default: config lcm_url, then $LCM_DEFAULT_URL)");
+}
+
+Process::~Process() = default;
+
+int Process::init(int argc, char** argv) {
+  try {
+    cli_.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return cli_.exit(e);
+  }
+  try {
+    if (!config_path_.empty()) config_ = loadYamlFile(config_path_);
+  } catch (const std::exception& e) {
+    std::cerr << name_ << ": " << e.what() << "\n";
+    return 2;
+  }
+  const std::string url = resolveLcmUrl(lcm_url_flag_, config_);
+  lcm_ = std::make_unique<lcm::LCM>(url);
+  if (!lcm_->good()) {
+    std::cerr << name_ << ": cannot open LCM '" << (url.empty() ? "(default)" : url) << "'\n";
+    return 3;
+  }
+  struct sigaction sa {};
+  sa.sa_handler = onSignal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  last_cpu_s_ = processCpuSeconds();
+  last_status_wall_ = std::chrono::steady_clock::now();
+  setState("running");
+  return -1;
+}
+
+void Process::setState(const std::string& state) {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  state_ = state;
+}
+
+void Process::publishStatus() {
+  status_t msg;
+  msg.utime = nowUtime();
+  msg.process = name_;
+  msg.host = hostName();
+  msg.pid = static_cast<int32_t>(getpid());
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    msg.state = state_;
+  }
+  for (const auto& [k, v] : counters_.snapshot()) {
+    msg.counter_names.push_back(k);
+    msg.counter_values.push_back(v);
+  }
+  msg.num_counters = static_cast<int32_t>(msg.counter_names.size());
+  msg.latency_p50_ms = latency_.percentile(0.5);
+  msg.latency_p99_ms = latency_.percentile(0.99);
+  const auto wall = std::chrono::steady_clock::now();
+  const double cpu = processCpuSeconds();
+  const double dt = std::chrono::duration<double>(wall - last_status_wall_).count();
+  msg.cpu_fraction = dt > 0 ? (cpu - last_cpu_s_) / dt : 0.0;
+  last_cpu_s_ = cpu;
+  last_status_wall_ = wall;
+  lcm_->publish(channels::kStatus, &msg);
+}
+
+int Process::spin() {
+  auto next_status = std::chrono::steady_clock::now();
+  while (!g_stop.load()) {
+    const int rc = lcm_->handleTimeout(100);
+    if (rc < 0) {
+      std::cerr << name_ << ": LCM handle failed\n";
+      return 1;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= next_status) {
+      publishStatus();
+      next_status = now + std::chrono::seconds(1);
+    }
+  }
+  setState("stopped");
+  publishStatus();
+  return 0;
+}
+
+void Process::requestStop() { g_stop.store(true); }
+bool Process::stopRequested() { return g_stop.load(); }
+
+}  // namespace lanemap

@@ -1,0 +1,107 @@
+// The small process framework every lanemap process and driver uses:
+// command line (--config, --lcm-url, --help), YAML config, the LCM instance, clean shutdown on
+// SIGINT/SIGTERM, and a 1 Hz STATUS message with the process's counters.
+//
+//   int main(int argc, char** argv) {
+//     lanemap::Process process("road_tracker");
+//     if (int rc = process.init(argc, argv); rc >= 0) return rc;
+//     RoadTrackerApp app(process);      // subscribes in its constructor
+//     return process.spin();            // until SIGINT/SIGTERM
+//   }
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+namespace lanemap {
+
+// Named monotonic counters, reported in STATUS. Thread-safe.
+class Counters {
+ public:
+  void add(const std::string& name, int64_t n = 1);
+  void set(const std::string& name, int64_t value);
+  int64_t get(const std::string& name) const;
+  std::map<std::string, int64_t> snapshot() const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<std::string, int64_t> values_;
+};
+
+// Latencies (ms) of the last few hundred events, for p50/p99 in STATUS.
+class LatencyWindow {
+ public:
+  void add(double ms);
+  double percentile(double p) const;  // NaN when empty
+
+ private:
+  mutable std::mutex mutex_;
+  std::deque<double> samples_;
+};
+
+// Resolves the LCM URL: explicit flag, else the config's `lcm_url`, else $LCM_DEFAULT_URL,
+// else "" (LCM's own default).
+std::string resolveLcmUrl(const std::string& flag, const YAML::Node& config);
+
+// Loads a YAML file; throws std::runtime_error naming the file and the problem.
+YAML::Node loadYamlFile(const std::string& path);
+
+class Process {
+ public:
+  explicit Process(std::string name);
+  ~Process();
+
+  // Command line of this process: add options before init().
+  CLI::App& cli() { return cli_; }
+
+  // Parses the command line, loads the config, creates the LCM instance and installs the signal
+  // handlers. Returns -1 to go on, or an exit code (0 after --help, non-zero on an error, which it
+  // has printed).
+  int init(int argc, char** argv);
+
+  const std::string& name() const { return name_; }
+  const YAML::Node& config() const { return config_; }
+  lcm::LCM& lcm() { return *lcm_; }
+  Counters& counters() { return counters_; }
+  LatencyWindow& latency() { return latency_; }
+  void setState(const std::string& state);
+
+  // Handles LCM messages until SIGINT/SIGTERM (or requestStop()), publishing STATUS every second.
+  // Returns the exit code.
+  int spin();
+
+  // Publishes one STATUS message now (spin() calls it at 1 Hz).
+  void publishStatus();
+
+  static void requestStop();
+  static bool stopRequested();
+
+ private:
+  std::string name_;
+  CLI::App cli_;
+  std::string config_path_;
+  std::string lcm_url_flag_;
+  YAML::Node config_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  Counters counters_;
+  LatencyWindow latency_;
+  std::mutex state_mutex_;
+  std::string state_ = "starting";
+  double last_cpu_s_ = 0.0;
+  std::chrono::steady_clock::time_point last_status_wall_;
+};
+
+// Microseconds since the epoch, the utime of every lanemap message.
+int64_t nowUtime();
+
+}  // namespace lanemap

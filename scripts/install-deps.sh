@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Installs the Debian packages lanemap needs, only when something is missing (idempotent).
+# Usage: scripts/install-deps.sh            (as root, or with sudo available)
+set -euo pipefail
+PACKAGES=(
+  build-essential cmake pkg-config git
+  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jdk-headless
+  libeigen3-dev libopencv-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev
+  libgeographiclib-dev libv4l-dev libosmium2-dev libprotozero-dev libbz2-dev zlib1g-dev libexpat1-dev
+  libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev
+  osmium-tool iproute2 util-linux
+)
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} Debian packages present"
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null || { echo "install-deps: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+  SUDO=sudo
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -127,6 +127,7 @@ int Process::init(int argc, char** argv) {
     std::cerr << name_ << ": cannot open LCM '" << (url.empty() ? "(default)" : url) << "'\n";
     return 3;
   }
+  g_stop.store(false);
   struct sigaction sa {};
   sa.sa_handler = onSignal;
   sigemptyset(&sa.sa_mask);

@@ -34,7 +34,10 @@ struct LineString {
 struct Lanelet {
   int64_t id = 0;
   LaneletKind kind = LaneletKind::kRoad;
-  int64_t left_id = 0;   // LineString ids; the left bound runs in the driving direction
+  // LineString ids of the bounds. A bound normally runs in the driving direction; a line shared
+  // with a lane of the opposite direction runs against it for one of the two, as in Lanelet2
+  // (whose loader aligns bounds by geometry). The centre line always gives the driving direction.
+  int64_t left_id = 0;
   int64_t right_id = 0;
   std::vector<Eigen::Vector3d> centre;  // in the driving direction
   std::vector<int64_t> successors;      // lanelet ids

@@ -1,0 +1,926 @@
+// Lanelet2 OSM writer and reader for map::LaneMap (see lanelet2.h for the conventions).
+#include "core/io/lanelet2.h"
+
+#include <osmium/handler.hpp>
+#include <osmium/io/reader.hpp>
+#include <osmium/io/xml_input.hpp>
+#include <osmium/osm/node.hpp>
+#include <osmium/osm/relation.hpp>
+#include <osmium/osm/way.hpp>
+#include <osmium/visitor.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <set>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace lanemap::io {
+
+using map::LaneletKind;
+using map::LaneMap;
+using map::LineType;
+using map::TurnDirection;
+
+namespace {
+
+constexpr double kNodeMergeDistanceM = 1e-3;   // writer: points closer than 1 mm share a node
+constexpr double kSuccessorDistanceM = 1e-2;   // reader: end/start points closer than 1 cm meet
+constexpr double kLocalXyAgreementM = 0.05;    // local_x/y vs lat/lon: osmium keeps 1e-7 deg
+                                               // (<= 1.1 cm); 5 cm leaves margin, an origin
+                                               // shift of another map is far larger
+
+// ---------------------------------------------------------------- shared geometry helpers
+
+double polylineLength(const std::vector<Eigen::Vector3d>& pts) {
+  double len = 0.0;
+  for (size_t i = 1; i < pts.size(); ++i) len += (pts[i] - pts[i - 1]).norm();
+  return len;
+}
+
+// n points spread evenly by arc length from the first to the last point of `pts`.
+std::vector<Eigen::Vector3d> resampleEvenly(const std::vector<Eigen::Vector3d>& pts, size_t n) {
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(n);
+  const double total = polylineLength(pts);
+  if (pts.size() < 2 || total <= 0.0) {
+    out.assign(n, pts.empty() ? Eigen::Vector3d::Zero() : pts.front());
+    return out;
+  }
+  size_t seg = 0;
+  double seg_start = 0.0;  // arc length at pts[seg]
+  for (size_t i = 0; i < n; ++i) {
+    const double s = (n == 1) ? 0.0 : total * static_cast<double>(i) / static_cast<double>(n - 1);
+    while (seg + 2 < pts.size() && seg_start + (pts[seg + 1] - pts[seg]).norm() < s) {
+      seg_start += (pts[seg + 1] - pts[seg]).norm();
+      ++seg;
+    }
+    const double seg_len = (pts[seg + 1] - pts[seg]).norm();
+    const double t = seg_len > 0.0 ? std::clamp((s - seg_start) / seg_len, 0.0, 1.0) : 0.0;
+    out.push_back(pts[seg] + t * (pts[seg + 1] - pts[seg]));
+  }
+  out.back() = pts.back();
+  return out;
+}
+
+// True when `right` runs the other way than `left` (its ends are nearer the other ends).
+bool runsAgainst(const std::vector<Eigen::Vector3d>& left, const std::vector<Eigen::Vector3d>& right) {
+  const auto d = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return (a - b).head<2>().norm();
+  };
+  const double same = d(left.front(), right.front()) + d(left.back(), right.back());
+  const double crossed = d(left.front(), right.back()) + d(left.back(), right.front());
+  return crossed < same;
+}
+
+// Signed area (shoelace, xy) of the ring left bound + reversed right bound. Negative when the
+// left bound lies on the left of the driving direction (the ring then runs clockwise).
+double laneletRingArea(const std::vector<Eigen::Vector3d>& left,
+                       const std::vector<Eigen::Vector3d>& right) {
+  std::vector<Eigen::Vector2d> ring;
+  for (const auto& p : left) ring.push_back(p.head<2>());
+  for (auto it = right.rbegin(); it != right.rend(); ++it) ring.push_back(it->head<2>());
+  double area2 = 0.0;
+  for (size_t i = 0; i < ring.size(); ++i) {
+    const auto& a = ring[i];
+    const auto& b = ring[(i + 1) % ring.size()];
+    area2 += a.x() * b.y() - b.x() * a.y();
+  }
+  return 0.5 * area2;
+}
+
+std::string escapeXml(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&apos;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string formatDouble(const char* fmt, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), fmt, v);
+  return buf;
+}
+
+// ---------------------------------------------------------------- writer
+
+struct OsmLineTags {
+  const char* type;
+  const char* subtype;  // nullptr: none
+};
+
+OsmLineTags osmTagsOf(LineType t) {
+  switch (t) {
+    case LineType::kDashed: return {"line_thin", "dashed"};
+    case LineType::kSolid: return {"line_thin", "solid"};
+    case LineType::kSolidSolid: return {"line_thin", "solid_solid"};
+    case LineType::kCurb: return {"curbstone", "high"};
+    case LineType::kVirtual: return {"virtual", nullptr};
+    case LineType::kStopLine: return {"stop_line", nullptr};
+  }
+  return {"virtual", nullptr};
+}
+
+const char* turnTag(TurnDirection t) {
+  switch (t) {
+    case TurnDirection::kStraight: return "straight";
+    case TurnDirection::kLeft: return "left";
+    case TurnDirection::kRight: return "right";
+    case TurnDirection::kNone: break;
+  }
+  return nullptr;
+}
+
+// Nodes of the file: one per distinct point (points closer than 1 mm share a node), ids given in
+// order of first use from `next_id` on.
+class NodeTable {
+ public:
+  explicit NodeTable(int64_t first_id) : next_id_(first_id) {}
+
+  int64_t idFor(const Eigen::Vector3d& p) {
+    const int64_t cx = cellOf(p.x()), cy = cellOf(p.y());
+    for (int64_t dx = -1; dx <= 1; ++dx) {
+      for (int64_t dy = -1; dy <= 1; ++dy) {
+        const auto it = cells_.find(key(cx + dx, cy + dy));
+        if (it == cells_.end()) continue;
+        for (size_t index : it->second) {
+          if ((points_[index] - p).norm() < kNodeMergeDistanceM) return ids_[index];
+        }
+      }
+    }
+    cells_[key(cx, cy)].push_back(points_.size());
+    points_.push_back(p);
+    ids_.push_back(next_id_);
+    return next_id_++;
+  }
+
+  size_t size() const { return points_.size(); }
+  int64_t id(size_t i) const { return ids_[i]; }
+  const Eigen::Vector3d& point(size_t i) const { return points_[i]; }
+
+ private:
+  static int64_t cellOf(double v) { return static_cast<int64_t>(std::floor(v / kNodeMergeDistanceM)); }
+  static uint64_t key(int64_t cx, int64_t cy) {
+    return (static_cast<uint64_t>(cx) * 0x9E3779B97F4A7C15ull) ^ static_cast<uint64_t>(cy);
+  }
+  int64_t next_id_;
+  std::unordered_map<uint64_t, std::vector<size_t>> cells_;
+  std::vector<Eigen::Vector3d> points_;
+  std::vector<int64_t> ids_;
+};
+
+// Which OSM id every line and lanelet gets.
+struct IdPlan {
+  std::unordered_map<int64_t, int64_t> way_of_line;
+  std::unordered_map<int64_t, int64_t> relation_of_lanelet;
+  int64_t next_free = 1;
+};
+
+IdPlan planIds(const LaneMap& map) {
+  IdPlan plan;
+  std::set<int64_t> used;
+  bool keep = true;
+  int64_t max_id = 0;
+  for (const auto& l : map.lines) {
+    keep = keep && l.id > 0 && used.insert(l.id).second;
+    max_id = std::max(max_id, l.id);
+  }
+  for (const auto& ll : map.lanelets) {
+    keep = keep && ll.id > 0 && used.insert(ll.id).second;
+    max_id = std::max(max_id, ll.id);
+  }
+  int64_t next = 1;
+  for (const auto& l : map.lines) plan.way_of_line[l.id] = keep ? l.id : next++;
+  for (const auto& ll : map.lanelets) plan.relation_of_lanelet[ll.id] = keep ? ll.id : next++;
+  plan.next_free = keep ? max_id + 1 : next;
+  return plan;
+}
+
+// Lanelet2's loader aligns a lanelet's bounds by geometry alone (OSM cannot say "inverted"): it
+// turns the right bound to run like the left one, then turns both when the left one lies on the
+// right. A bound may therefore run against the driving direction, as the line shared by two lanes
+// of opposite directions does for one of them. The problem is a lanelet that Lanelet2 would read
+// against its own centre line (our driving direction), or whose bounds are degenerate.
+std::string orientationProblem(const map::Lanelet& ll, const map::LineString& left,
+                               const map::LineString& right) {
+  if (left.points.size() < 2 || right.points.size() < 2) return {};
+  std::vector<Eigen::Vector3d> l = left.points;
+  std::vector<Eigen::Vector3d> r = right.points;
+  if (runsAgainst(l, r)) std::reverse(r.begin(), r.end());
+  const bool turned = laneletRingArea(l, r) > 0.0;
+  if (turned) {
+    std::reverse(l.begin(), l.end());
+    std::reverse(r.begin(), r.end());
+  }
+  if (ll.centre.size() >= 2 ? runsAgainst(l, ll.centre) : turned) {
+    return "lanelet " + std::to_string(ll.id) + ": Lanelet2 would read its bounds (left " +
+           std::to_string(left.id) + ", right " + std::to_string(right.id) +
+           ") against its driving direction: the left bound must lie on the left";
+  }
+  return {};
+}
+
+void validateForWriting(const LaneMap& map, const Lanelet2WriteOptions& options,
+                        const std::string& name) {
+  const auto fail = [&](const std::string& what) {
+    throw Lanelet2Error("cannot write Lanelet2 map '" + name + "': " + what);
+  };
+  std::unordered_map<int64_t, const map::LineString*> lines;
+  for (const auto& l : map.lines) {
+    if (!lines.emplace(l.id, &l).second) fail("duplicate line string id " + std::to_string(l.id));
+    if (l.points.empty()) fail("line string " + std::to_string(l.id) + " has no point");
+    for (const auto& p : l.points) {
+      if (!p.allFinite()) fail("line string " + std::to_string(l.id) + " has a non-finite point");
+    }
+  }
+  std::unordered_set<int64_t> lanelet_ids;
+  for (const auto& ll : map.lanelets) {
+    const std::string what = "lanelet " + std::to_string(ll.id);
+    if (!lanelet_ids.insert(ll.id).second) fail("duplicate lanelet id " + std::to_string(ll.id));
+    const auto left = lines.find(ll.left_id);
+    const auto right = lines.find(ll.right_id);
+    if (left == lines.end()) fail(what + " refers to missing left bound " + std::to_string(ll.left_id));
+    if (right == lines.end()) fail(what + " refers to missing right bound " + std::to_string(ll.right_id));
+    if (ll.left_id == ll.right_id) fail(what + " has the same line string on both sides");
+    if (left->second->points.size() < 2 || right->second->points.size() < 2) {
+      fail(what + " has a bound with fewer than 2 points");
+    }
+    if (ll.stop_line_id && !lines.count(*ll.stop_line_id)) {
+      fail(what + " refers to missing stop line " + std::to_string(*ll.stop_line_id));
+    }
+    for (const auto& p : ll.centre) {
+      if (!p.allFinite()) fail(what + " has a non-finite centre point");
+    }
+    if (options.check_orientation) {
+      const std::string problem = orientationProblem(ll, *left->second, *right->second);
+      if (!problem.empty()) fail(problem);
+    }
+  }
+}
+
+void appendTag(std::string& out, const std::string& k, const std::string& v) {
+  out += "    <tag k=\"" + escapeXml(k) + "\" v=\"" + escapeXml(v) + "\"/>\n";
+}
+
+// A way's node ids, without consecutive repeats (points < 1 mm apart collapse into one node).
+std::vector<int64_t> wayNodes(NodeTable& nodes, const std::vector<Eigen::Vector3d>& pts) {
+  std::vector<int64_t> refs;
+  for (const auto& p : pts) {
+    const int64_t id = nodes.idFor(p);
+    if (refs.empty() || refs.back() != id) refs.push_back(id);
+  }
+  return refs;
+}
+
+void appendWay(std::string& out, int64_t id, const std::vector<int64_t>& refs,
+               const std::vector<std::pair<std::string, std::string>>& tags) {
+  out += "  <way id=\"" + std::to_string(id) + "\" version=\"1\" visible=\"true\">\n";
+  for (int64_t r : refs) out += "    <nd ref=\"" + std::to_string(r) + "\"/>\n";
+  for (const auto& [k, v] : tags) appendTag(out, k, v);
+  out += "  </way>\n";
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- coordinates
+
+geo::LatLonAlt enuToLatLonEle(const geo::LocalFrame& frame, const Eigen::Vector3d& enu) {
+  geo::LatLonAlt p = frame.toWgs84(enu);
+  p.alt = frame.origin().alt + enu.z();
+  return p;
+}
+
+Eigen::Vector3d latLonEleToEnu(const geo::LocalFrame& frame, double lat, double lon, double ele) {
+  // Find the ellipsoidal height h at which the vertical through lat/lon has ENU z = target.
+  // dz/dh = cos(angle between the two verticals) ~ 1, so a few fixed-point steps converge.
+  const double target_z = ele - frame.origin().alt;
+  double h = ele;
+  Eigen::Vector3d p = frame.toEnu(lat, lon, h);
+  for (int i = 0; i < 4 && std::abs(p.z() - target_z) > 1e-9; ++i) {
+    h += target_z - p.z();
+    p = frame.toEnu(lat, lon, h);
+  }
+  p.z() = target_z;
+  return p;
+}
+
+std::vector<std::string> orientationProblems(const LaneMap& map) {
+  std::vector<std::string> problems;
+  for (const auto& ll : map.lanelets) {
+    const auto* left = map.line(ll.left_id);
+    const auto* right = map.line(ll.right_id);
+    if (!left || !right) continue;
+    std::string p = orientationProblem(ll, *left, *right);
+    if (!p.empty()) problems.push_back(std::move(p));
+  }
+  return problems;
+}
+
+std::vector<Eigen::Vector3d> laneletOutline(const LaneMap& map, const map::Lanelet& lanelet) {
+  const auto* left = map.line(lanelet.left_id);
+  const auto* right = map.line(lanelet.right_id);
+  if (!left || !right || left->points.empty() || right->points.empty()) return {};
+  std::vector<Eigen::Vector3d> ring = left->points;
+  if (runsAgainst(left->points, right->points)) {
+    ring.insert(ring.end(), right->points.begin(), right->points.end());
+  } else {
+    ring.insert(ring.end(), right->points.rbegin(), right->points.rend());
+  }
+  return ring;
+}
+
+// ---------------------------------------------------------------- writer
+
+std::string toLanelet2Xml(const LaneMap& map, const Lanelet2WriteOptions& options,
+                          const std::string& name) {
+  validateForWriting(map, options, name);
+  const geo::LocalFrame frame({map.origin_lat, map.origin_lon, map.origin_alt});
+  IdPlan ids = planIds(map);
+
+  // Centre line ways get the ids right after the lines' and lanelets' ids; nodes come after.
+  std::unordered_map<int64_t, int64_t> centre_way_of_lanelet;
+  if (options.write_centre_lines) {
+    for (const auto& ll : map.lanelets) {
+      if (ll.centre.size() >= 2) centre_way_of_lanelet[ll.id] = ids.next_free++;
+    }
+  }
+  NodeTable nodes(ids.next_free);
+
+  std::string ways_xml;
+  for (const auto& line : map.lines) {
+    const OsmLineTags t = osmTagsOf(line.type);
+    std::vector<std::pair<std::string, std::string>> tags{{"type", t.type}};
+    if (t.subtype) tags.emplace_back("subtype", t.subtype);
+    appendWay(ways_xml, ids.way_of_line.at(line.id), wayNodes(nodes, line.points), tags);
+  }
+  for (const auto& ll : map.lanelets) {
+    const auto it = centre_way_of_lanelet.find(ll.id);
+    if (it == centre_way_of_lanelet.end()) continue;
+    appendWay(ways_xml, it->second, wayNodes(nodes, ll.centre), {{"type", "centerline"}});
+  }
+
+  std::string rel_xml;
+  for (const auto& ll : map.lanelets) {
+    rel_xml += "  <relation id=\"" + std::to_string(ids.relation_of_lanelet.at(ll.id)) +
+               "\" version=\"1\" visible=\"true\">\n";
+    const auto member = [&](int64_t way, const char* role) {
+      rel_xml += "    <member type=\"way\" ref=\"" + std::to_string(way) + "\" role=\"" + role + "\"/>\n";
+    };
+    member(ids.way_of_line.at(ll.left_id), "left");
+    member(ids.way_of_line.at(ll.right_id), "right");
+    const auto centre = centre_way_of_lanelet.find(ll.id);
+    if (centre != centre_way_of_lanelet.end()) member(centre->second, "centerline");
+    appendTag(rel_xml, "type", "lanelet");
+    appendTag(rel_xml, "subtype", "road");
+    appendTag(rel_xml, "location", "urban");
+    appendTag(rel_xml, "one_way", "yes");
+    if (const char* turn = turnTag(ll.turn)) appendTag(rel_xml, "turn_direction", turn);
+    appendTag(rel_xml, "lanemap:kind", ll.kind == LaneletKind::kIntersection ? "intersection" : "road");
+    appendTag(rel_xml, "lanemap:road_id", std::to_string(ll.road_id));
+    appendTag(rel_xml, "lanemap:from_node", std::to_string(ll.from_node));
+    appendTag(rel_xml, "lanemap:to_node", std::to_string(ll.to_node));
+    appendTag(rel_xml, "lanemap:intersection_id", std::to_string(ll.intersection_id));
+    appendTag(rel_xml, "lanemap:index_from_left", std::to_string(ll.index_from_left));
+    if (ll.stop_line_id) {
+      appendTag(rel_xml, "lanemap:stop_line", std::to_string(ids.way_of_line.at(*ll.stop_line_id)));
+    }
+    rel_xml += "  </relation>\n";
+  }
+
+  std::string out;
+  out.reserve(ways_xml.size() + rel_xml.size() + nodes.size() * 260 + 256);
+  out += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  out += "<osm version=\"0.6\" generator=\"lanemap\">\n";
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    const Eigen::Vector3d& p = nodes.point(i);
+    const geo::LatLonAlt ll = enuToLatLonEle(frame, p);
+    out += "  <node id=\"" + std::to_string(nodes.id(i)) + "\" version=\"1\" visible=\"true\" lat=\"" +
+           formatDouble("%.10f", ll.lat) + "\" lon=\"" + formatDouble("%.10f", ll.lon) + "\">\n";
+    appendTag(out, "ele", formatDouble("%.4f", ll.alt));
+    appendTag(out, "local_x", formatDouble("%.4f", p.x()));
+    appendTag(out, "local_y", formatDouble("%.4f", p.y()));
+    out += "  </node>\n";
+  }
+  out += ways_xml;
+  out += rel_xml;
+  out += "</osm>\n";
+  return out;
+}
+
+void writeLanelet2(const LaneMap& map, const std::string& path, const Lanelet2WriteOptions& options) {
+  writeFileAtomically(path, toLanelet2Xml(map, options, path));
+}
+
+void writeLanelet2(const LaneMap& map, const std::string& path) {
+  writeLanelet2(map, path, Lanelet2WriteOptions{});
+}
+
+// ---------------------------------------------------------------- reader
+
+namespace {
+
+struct RawNode {
+  double lat = 0.0, lon = 0.0;
+  bool located = false;
+  std::string ele, local_x, local_y;  // tag values, parsed when the node is used
+};
+
+struct RawWay {
+  std::vector<int64_t> refs;
+  std::string type, subtype;
+};
+
+struct RawMember {
+  char kind = 'w';  // 'n', 'w', 'r'
+  int64_t ref = 0;
+  std::string role;
+};
+
+struct RawRelation {
+  std::vector<RawMember> members;
+  std::map<std::string, std::string> tags;
+  std::string tag(const std::string& k) const {
+    const auto it = tags.find(k);
+    return it == tags.end() ? std::string() : it->second;
+  }
+};
+
+struct RawOsm {
+  std::unordered_map<int64_t, RawNode> nodes;
+  std::unordered_map<int64_t, RawWay> ways;
+  std::map<int64_t, RawRelation> relations;  // sorted: deterministic lanelet order
+};
+
+class Collector : public osmium::handler::Handler {
+ public:
+  explicit Collector(RawOsm& raw) : raw_(raw) {}
+
+  void node(const osmium::Node& n) {
+    RawNode& out = raw_.nodes[n.id()];
+    if (n.location().valid()) {
+      out.located = true;
+      out.lat = n.location().lat_without_check();
+      out.lon = n.location().lon_without_check();
+    }
+    if (const char* v = n.tags().get_value_by_key("ele")) out.ele = v;
+    if (const char* v = n.tags().get_value_by_key("local_x")) out.local_x = v;
+    if (const char* v = n.tags().get_value_by_key("local_y")) out.local_y = v;
+  }
+
+  void way(const osmium::Way& w) {
+    RawWay& out = raw_.ways[w.id()];
+    for (const auto& nr : w.nodes()) out.refs.push_back(nr.ref());
+    if (const char* v = w.tags().get_value_by_key("type")) out.type = v;
+    if (const char* v = w.tags().get_value_by_key("subtype")) out.subtype = v;
+  }
+
+  void relation(const osmium::Relation& r) {
+    RawRelation& out = raw_.relations[r.id()];
+    for (const auto& m : r.members()) {
+      RawMember rm;
+      rm.kind = m.type() == osmium::item_type::node ? 'n' : m.type() == osmium::item_type::way ? 'w' : 'r';
+      rm.ref = m.ref();
+      rm.role = m.role();
+      out.members.push_back(std::move(rm));
+    }
+    for (const auto& t : r.tags()) out.tags[t.key()] = t.value();
+  }
+
+ private:
+  RawOsm& raw_;
+};
+
+RawOsm parseOsmFile(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    throw Lanelet2Error("cannot read Lanelet2 map '" + path + "': no such file");
+  }
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw Lanelet2Error("cannot read Lanelet2 map '" + path + "': not a regular file");
+  }
+  if (std::filesystem::file_size(path, ec) == 0) {
+    throw Lanelet2Error("cannot read Lanelet2 map '" + path + "': empty file");
+  }
+  RawOsm raw;
+  try {
+    osmium::io::Reader reader{osmium::io::File{path, "osm"}};
+    Collector collector(raw);
+    osmium::apply(reader, collector);
+    reader.close();
+  } catch (const std::exception& e) {
+    throw Lanelet2Error("cannot read Lanelet2 map '" + path + "': " + e.what());
+  }
+  return raw;
+}
+
+double parseNumber(const std::string& text, const std::string& path, const std::string& what) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || end == text.c_str() || *end != '\0' || !std::isfinite(v)) {
+    throw Lanelet2Error("malformed Lanelet2 map '" + path + "': " + what + " '" + text +
+                        "' is not a number");
+  }
+  return v;
+}
+
+int64_t parseInteger(const std::string& text, const std::string& path, const std::string& what) {
+  try {
+    size_t used = 0;
+    const long long v = std::stoll(text, &used);
+    if (used == text.size()) return v;
+  } catch (const std::exception&) {
+  }
+  throw Lanelet2Error("malformed Lanelet2 map '" + path + "': " + what + " '" + text +
+                      "' is not an integer");
+}
+
+LineType lineTypeOf(const RawWay& w) {
+  const std::string& t = w.type;
+  const std::string& s = w.subtype;
+  if (t == "line_thin" || t == "line_thick") {
+    if (s == "dashed") return LineType::kDashed;
+    if (s == "solid_solid") return LineType::kSolidSolid;
+    return LineType::kSolid;  // solid, dashed_solid, solid_dashed (one side may not cross), none
+  }
+  if (t == "curbstone" || t == "road_border" || t == "fence" || t == "wall" ||
+      t == "guard_rail" || t == "keepout" || t == "rail") {
+    return LineType::kCurb;  // physical borders
+  }
+  if (t == "stop_line") return LineType::kStopLine;
+  if (t == "bike_marking") return LineType::kDashed;
+  if (t == "zig-zag") return LineType::kSolid;
+  return LineType::kVirtual;  // virtual, pedestrian_marking, zebra_marking, untyped, unknown
+}
+
+TurnDirection turnOf(const std::string& v) {
+  if (v == "straight") return TurnDirection::kStraight;
+  if (v == "left") return TurnDirection::kLeft;
+  if (v == "right") return TurnDirection::kRight;
+  return TurnDirection::kNone;
+}
+
+// One bound of a lanelet as used by it, in its driving direction.
+struct Bound {
+  int64_t way_id = 0;
+  bool reversed = false;  // relative to the way's node order
+  std::vector<int64_t> node_ids;
+  std::vector<Eigen::Vector3d> points;
+  void reverse() {
+    reversed = !reversed;
+    std::reverse(node_ids.begin(), node_ids.end());
+    std::reverse(points.begin(), points.end());
+  }
+};
+
+struct ReadLanelet {
+  map::Lanelet lanelet;
+  Bound left, right;
+  std::optional<int64_t> centre_way;
+  std::optional<int64_t> stop_way;
+};
+
+class Lanelet2Reader {
+ public:
+  Lanelet2Reader(const std::string& path, double lat, double lon, const Lanelet2ReadOptions& options)
+      : path_(path), options_(options), frame_({lat, lon, options.origin_alt}), raw_(parseOsmFile(path)) {
+    out_.map.origin_lat = lat;
+    out_.map.origin_lon = lon;
+    out_.map.origin_alt = options.origin_alt;
+  }
+
+  Lanelet2File read() {
+    collectLanelets();
+    decideCoordinates();
+    for (auto& rl : lanelets_) buildBounds(rl);
+    buildLines();
+    for (auto& rl : lanelets_) buildCentre(rl);
+    findSuccessors();
+    for (auto& rl : lanelets_) out_.map.lanelets.push_back(std::move(rl.lanelet));
+    return std::move(out_);
+  }
+
+ private:
+  [[noreturn]] void malformed(const std::string& what) const {
+    throw Lanelet2Error("malformed Lanelet2 map '" + path_ + "': " + what);
+  }
+
+  const RawWay& way(int64_t id, int64_t relation) const {
+    const auto it = raw_.ways.find(id);
+    if (it == raw_.ways.end()) {
+      malformed("relation " + std::to_string(relation) + " refers to missing way " + std::to_string(id));
+    }
+    return it->second;
+  }
+
+  bool keepSubtype(const std::string& subtype) const {
+    if (options_.subtypes.empty()) return true;
+    return std::find(options_.subtypes.begin(), options_.subtypes.end(), subtype) !=
+           options_.subtypes.end();
+  }
+
+  // The stop line of a foreign lanelet: a stop_line way that one of its regulatory elements
+  // (traffic light, right of way, ...) names as `ref_line`.
+  std::optional<int64_t> stopLineFromRegulatoryElements(const RawRelation& rel) const {
+    for (const auto& m : rel.members) {
+      if (m.kind != 'r' || m.role != "regulatory_element") continue;
+      const auto reg = raw_.relations.find(m.ref);
+      if (reg == raw_.relations.end()) continue;
+      for (const auto& rm : reg->second.members) {
+        if (rm.kind != 'w' || rm.role != "ref_line") continue;
+        const auto w = raw_.ways.find(rm.ref);
+        if (w != raw_.ways.end() && w->second.type == "stop_line") return rm.ref;
+      }
+    }
+    return std::nullopt;
+  }
+
+  void collectLanelets() {
+    for (const auto& [id, rel] : raw_.relations) {
+      if (rel.tag("type") != "lanelet") continue;
+      const std::string subtype = rel.tag("subtype");
+      if (!keepSubtype(subtype)) continue;
+      ReadLanelet rl;
+      rl.lanelet.id = id;
+      int lefts = 0, rights = 0, centres = 0;
+      for (const auto& m : rel.members) {
+        const bool inverted = m.role.find("inverted") != std::string::npos;
+        // "left"/"right", or a variant naming an inverted member ("left_inverted", ...).
+        const bool is_left = m.role == "left" || (inverted && m.role.find("left") != std::string::npos);
+        const bool is_right = m.role == "right" || (inverted && m.role.find("right") != std::string::npos);
+        if (m.role == "centerline") {
+          if (m.kind == 'w') rl.centre_way = m.ref;
+          ++centres;
+          continue;
+        }
+        if (!is_left && !is_right) continue;
+        if (m.kind != 'w') {
+          malformed("lanelet " + std::to_string(id) + ": member '" + m.role + "' is not a way");
+        }
+        Bound& b = is_left ? rl.left : rl.right;
+        (is_left ? lefts : rights)++;
+        b.way_id = m.ref;
+        b.reversed = inverted;
+        way(m.ref, id);  // must exist
+      }
+      if (lefts != 1 || rights != 1) {
+        malformed("lanelet " + std::to_string(id) + " has " + std::to_string(lefts) +
+                  " left and " + std::to_string(rights) + " right bounds (expected one each)");
+      }
+      if (centres > 1) malformed("lanelet " + std::to_string(id) + " has several centerlines");
+      fillAttributes(rl, rel);
+      out_.lanelet_subtype[id] = subtype;
+      lanelets_.push_back(std::move(rl));
+    }
+  }
+
+  void fillAttributes(ReadLanelet& rl, const RawRelation& rel) {
+    map::Lanelet& ll = rl.lanelet;
+    const std::string where = "lanelet " + std::to_string(ll.id) + " tag ";
+    const auto integer = [&](const char* key, int64_t fallback) {
+      const std::string v = rel.tag(key);
+      return v.empty() ? fallback : parseInteger(v, path_, where + key);
+    };
+    const std::string turn = rel.tag("turn_direction");
+    ll.turn = turnOf(turn);
+    ll.road_id = integer("lanemap:road_id", -1);
+    ll.from_node = integer("lanemap:from_node", -1);
+    ll.to_node = integer("lanemap:to_node", -1);
+    ll.intersection_id = integer("lanemap:intersection_id", -1);
+    ll.index_from_left = static_cast<int>(integer("lanemap:index_from_left", -1));
+    const std::string kind = rel.tag("lanemap:kind");
+    if (kind.empty()) {
+      ll.kind = (!turn.empty() || ll.intersection_id != -1) ? LaneletKind::kIntersection
+                                                            : LaneletKind::kRoad;
+    } else {
+      ll.kind = kind == "intersection" ? LaneletKind::kIntersection : LaneletKind::kRoad;
+    }
+    const std::string stop = rel.tag("lanemap:stop_line");
+    if (!stop.empty()) {
+      rl.stop_way = parseInteger(stop, path_, where + "lanemap:stop_line");
+      way(*rl.stop_way, ll.id);
+    } else {
+      rl.stop_way = stopLineFromRegulatoryElements(rel);
+    }
+  }
+
+  // Every node the kept lanelets use (and one way using it), for the coordinate decision.
+  std::map<int64_t, int64_t> usedNodes() const {
+    std::map<int64_t, int64_t> used;
+    const auto add = [&](int64_t way_id) {
+      const auto it = raw_.ways.find(way_id);
+      if (it == raw_.ways.end()) return;
+      for (int64_t n : it->second.refs) used.emplace(n, way_id);
+    };
+    for (const auto& rl : lanelets_) {
+      add(rl.left.way_id);
+      add(rl.right.way_id);
+      if (rl.centre_way) add(*rl.centre_way);
+      if (rl.stop_way) add(*rl.stop_way);
+    }
+    return used;
+  }
+
+  // Positions from lat/lon(/ele); from local_x/local_y when every used node has them and they
+  // agree with lat/lon in our frame (the file was written with our origin).
+  void decideCoordinates() {
+    bool all_local = true;
+    for (const auto& [id, way_id] : usedNodes()) {
+      const auto it = raw_.nodes.find(id);
+      if (it == raw_.nodes.end()) {
+        malformed("way " + std::to_string(way_id) + " refers to missing node " + std::to_string(id));
+      }
+      const RawNode& n = it->second;
+      if (!n.located) malformed("node " + std::to_string(id) + " has no valid lat/lon");
+      const double ele = n.ele.empty() ? options_.origin_alt
+                                       : parseNumber(n.ele, path_, "ele of node " + std::to_string(id));
+      Eigen::Vector3d p = latLonEleToEnu(frame_, n.lat, n.lon, ele);
+      if (all_local && !n.local_x.empty() && !n.local_y.empty()) {
+        char* end_x = nullptr;
+        char* end_y = nullptr;
+        const double x = std::strtod(n.local_x.c_str(), &end_x);
+        const double y = std::strtod(n.local_y.c_str(), &end_y);
+        const bool ok = *end_x == '\0' && *end_y == '\0' && std::isfinite(x) && std::isfinite(y);
+        if (ok && std::hypot(x - p.x(), y - p.y()) < kLocalXyAgreementM) {
+          local_[id] = Eigen::Vector2d(x, y);
+        } else {
+          all_local = false;
+        }
+      } else {
+        all_local = false;
+      }
+      position_[id] = p;
+    }
+    out_.used_local_xy = all_local && !position_.empty();
+    if (out_.used_local_xy) {
+      for (const auto& [id, xy] : local_) position_[id].head<2>() = xy;
+    }
+  }
+
+  void wayGeometry(int64_t way_id, int64_t relation, std::vector<int64_t>& ids,
+                   std::vector<Eigen::Vector3d>& pts) const {
+    const RawWay& w = way(way_id, relation);
+    if (w.refs.empty()) malformed("way " + std::to_string(way_id) + " has no node");
+    ids = w.refs;
+    pts.clear();
+    for (int64_t n : w.refs) pts.push_back(position_.at(n));
+  }
+
+  // Bounds in the driving direction, aligned as Lanelet2 aligns them.
+  void buildBounds(ReadLanelet& rl) {
+    for (Bound* b : {&rl.left, &rl.right}) {
+      const bool inverted = b->reversed;
+      wayGeometry(b->way_id, rl.lanelet.id, b->node_ids, b->points);
+      b->reversed = false;
+      if (inverted) b->reverse();
+    }
+    if (rl.left.points.size() < 2 || rl.right.points.size() < 2) {
+      malformed("lanelet " + std::to_string(rl.lanelet.id) + " has a bound with fewer than 2 nodes");
+    }
+    if (runsAgainst(rl.left.points, rl.right.points)) rl.right.reverse();
+    if (laneletRingArea(rl.left.points, rl.right.points) > 0.0) {
+      rl.left.reverse();
+      rl.right.reverse();
+    }
+  }
+
+  // One LineString per way in its own direction; a reversed copy (fresh id) for lanelets that use
+  // it the other way round, unless no lanelet uses it forwards (then the way itself is reversed).
+  void buildLines() {
+    std::map<int64_t, std::pair<int, int>> uses;  // way -> (forward, reversed)
+    for (const auto& rl : lanelets_) {
+      for (const Bound* b : {&rl.left, &rl.right}) {
+        auto& u = uses[b->way_id];
+        (b->reversed ? u.second : u.first)++;
+      }
+    }
+    int64_t next_id = 1;
+    for (const auto& [id, n] : raw_.nodes) next_id = std::max(next_id, std::abs(id) + 1);
+    for (const auto& [id, w] : raw_.ways) next_id = std::max(next_id, std::abs(id) + 1);
+    for (const auto& [id, r] : raw_.relations) next_id = std::max(next_id, std::abs(id) + 1);
+
+    std::map<std::pair<int64_t, bool>, int64_t> line_id;  // (way, reversed) -> line id
+    for (const auto& [way_id, u] : uses) {
+      if (u.first > 0) {
+        addLine(way_id, way_id, false);
+        line_id[{way_id, false}] = way_id;
+        if (u.second > 0) {
+          addLine(next_id, way_id, true);
+          out_.reversed_copy_of[next_id] = way_id;
+          line_id[{way_id, true}] = next_id++;
+        }
+      } else {
+        addLine(way_id, way_id, true);
+        line_id[{way_id, true}] = way_id;
+      }
+    }
+    std::set<int64_t> stop_ways;
+    for (auto& rl : lanelets_) {
+      rl.lanelet.left_id = line_id.at({rl.left.way_id, rl.left.reversed});
+      rl.lanelet.right_id = line_id.at({rl.right.way_id, rl.right.reversed});
+      if (rl.stop_way) {
+        rl.lanelet.stop_line_id = *rl.stop_way;
+        if (!uses.count(*rl.stop_way)) stop_ways.insert(*rl.stop_way);
+      }
+    }
+    for (int64_t w : stop_ways) addLine(w, w, false);
+    std::sort(out_.map.lines.begin(), out_.map.lines.end(),
+              [](const auto& a, const auto& b) { return a.id < b.id; });
+  }
+
+  void addLine(int64_t id, int64_t way_id, bool reversed) {
+    const RawWay& w = raw_.ways.at(way_id);
+    map::LineString line;
+    line.id = id;
+    line.type = lineTypeOf(w);
+    std::vector<int64_t> ids;
+    wayGeometry(way_id, way_id, ids, line.points);
+    if (reversed) std::reverse(line.points.begin(), line.points.end());
+    out_.line_tag[id] = w.subtype.empty() ? w.type : w.type + ":" + w.subtype;
+    out_.map.lines.push_back(std::move(line));
+  }
+
+  void buildCentre(ReadLanelet& rl) {
+    const auto& left = rl.left.points;
+    const auto& right = rl.right.points;
+    if (rl.centre_way) {
+      std::vector<int64_t> ids;
+      std::vector<Eigen::Vector3d> centre;
+      wayGeometry(*rl.centre_way, rl.lanelet.id, ids, centre);
+      const Eigen::Vector3d start = 0.5 * (left.front() + right.front());
+      if ((centre.back() - start).norm() < (centre.front() - start).norm()) {
+        std::reverse(centre.begin(), centre.end());
+      }
+      if (centre.size() >= 2) {
+        rl.lanelet.centre = std::move(centre);
+        return;
+      }
+    }
+    const double len = std::max(polylineLength(left), polylineLength(right));
+    const double spacing = options_.centre_spacing_m > 0.0 ? options_.centre_spacing_m : 1.0;
+    const size_t n = std::max({size_t{2}, left.size(), right.size(),
+                               static_cast<size_t>(std::ceil(len / spacing)) + 1});
+    const auto l = resampleEvenly(left, n);
+    const auto r = resampleEvenly(right, n);
+    rl.lanelet.centre.resize(n);
+    for (size_t i = 0; i < n; ++i) rl.lanelet.centre[i] = 0.5 * (l[i] + r[i]);
+    ++out_.computed_centres;
+  }
+
+  static bool samePoint(int64_t id_a, const Eigen::Vector3d& a, int64_t id_b, const Eigen::Vector3d& b) {
+    return id_a == id_b || (a - b).norm() < kSuccessorDistanceM;
+  }
+
+  // B succeeds A when A's bounds end where B's bounds start (both sides).
+  void findSuccessors() {
+    for (auto& a : lanelets_) {
+      for (const auto& b : lanelets_) {
+        if (&a == &b) continue;
+        if (samePoint(a.left.node_ids.back(), a.left.points.back(), b.left.node_ids.front(),
+                      b.left.points.front()) &&
+            samePoint(a.right.node_ids.back(), a.right.points.back(), b.right.node_ids.front(),
+                      b.right.points.front())) {
+          a.lanelet.successors.push_back(b.lanelet.id);
+        }
+      }
+    }
+  }
+
+  std::string path_;
+  Lanelet2ReadOptions options_;
+  geo::LocalFrame frame_;
+  RawOsm raw_;
+  Lanelet2File out_;
+  std::vector<ReadLanelet> lanelets_;
+  std::unordered_map<int64_t, Eigen::Vector3d> position_;
+  std::unordered_map<int64_t, Eigen::Vector2d> local_;
+};
+
+}  // namespace
+
+Lanelet2File readLanelet2File(const std::string& path, double origin_lat, double origin_lon,
+                              const Lanelet2ReadOptions& options) {
+  return Lanelet2Reader(path, origin_lat, origin_lon, options).read();
+}
+
+LaneMap readLanelet2(const std::string& path, double origin_lat, double origin_lon,
+                     const Lanelet2ReadOptions& options) {
+  return readLanelet2File(path, origin_lat, origin_lon, options).map;
+}
+
+LaneMap readLanelet2(const std::string& path, double origin_lat, double origin_lon) {
+  return readLanelet2(path, origin_lat, origin_lon, Lanelet2ReadOptions{});
+}
+
+}  // namespace lanemap::io

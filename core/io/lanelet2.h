@@ -1,0 +1,99 @@
+// Lanelet2 OSM <-> map::LaneMap. The writer produces a file Lanelet2's own loader reads without
+// errors (positive ids, lat/lon with 10 decimals, `ele` on every node, typed line strings, lanelet
+// relations with left/right members); the reader reads any Lanelet2 map (ours or someone else's,
+// e.g. the Lanelet2 project's Karlsruhe example) with libosmium.
+//
+// Conventions (see also writeLanelet2/readLanelet2 below):
+// - Coordinates: a node's lat/lon is the point's horizontal position, `ele` = origin_alt + ENU z
+//   (Lanelet2 uses `ele` as z). Every node also carries Autoware's `local_x`/`local_y` tags (ENU
+//   metres of the writer's origin) because libosmium stores lat/lon with 7 decimals (~1 cm); the
+//   reader uses them, for mm precision, when they agree with lat/lon in the reader's frame.
+// - Lanelet2 has no successor tags; successors are recovered from shared end/start points.
+// - Stop lines are ways type=stop_line; the lanelet that ends at one carries `lanemap:stop_line`
+//   = the way id (no regulatory element is written). The reader also takes a stop line from a
+//   regulatory element's `ref_line` member (traffic lights, right of way) in foreign maps.
+// - The centre line is written as a way (type=centerline) with member role `centerline`, which
+//   Lanelet2 loads as the lanelet's centreline; without it the reader averages the two bounds.
+#pragma once
+
+#include "core/geo/local_frame.h"
+#include "core/io/atomic_file.h"
+#include "core/map/lane_map.h"
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace lanemap::io {
+
+class Lanelet2Error : public IoError {
+ public:
+  using IoError::IoError;
+};
+
+struct Lanelet2WriteOptions {
+  bool write_centre_lines = true;  // the model's centre line as a `centerline` member way
+  bool check_orientation = true;   // throw when a lanelet's bounds do not run in one direction
+                                   // with the left bound on the left (see orientationProblems)
+};
+
+// Writes `map` as Lanelet2 OSM to `path`, atomically. Throws Lanelet2Error (message names the
+// path and the offending id) on an inconsistent map: a missing bound or stop line, a bound with
+// fewer than 2 points, duplicate line or lanelet ids, or (check_orientation) a wrongly oriented
+// lanelet. Ids: ways keep the LineString ids and relations the Lanelet ids when all are positive
+// and distinct; otherwise everything is renumbered (deterministically, in vector order).
+void writeLanelet2(const map::LaneMap& map, const std::string& path);
+void writeLanelet2(const map::LaneMap& map, const std::string& path,
+                   const Lanelet2WriteOptions& options);
+// The same document as a string (what writeLanelet2 writes). `name` is used in error messages.
+std::string toLanelet2Xml(const map::LaneMap& map, const Lanelet2WriteOptions& options = {},
+                          const std::string& name = "<lanelet2>");
+
+// One message per lanelet whose bounds do not run in one direction or whose left bound is not on
+// its left (in the driving direction). Empty when the map is consistent.
+std::vector<std::string> orientationProblems(const map::LaneMap& map);
+
+// The lanelet's outline for drawing and export: left bound forwards, then the right bound
+// backwards (the right bound turned first if it runs against the left one, so an inconsistently
+// oriented lanelet still gives a simple polygon). Not closed. Empty when a bound is missing.
+std::vector<Eigen::Vector3d> laneletOutline(const map::LaneMap& map, const map::Lanelet& lanelet);
+
+struct Lanelet2ReadOptions {
+  std::vector<std::string> subtypes;  // lanelet subtypes to keep ("road", ...); empty = all
+  double centre_spacing_m = 1.0;      // sample spacing of a centre line computed from the bounds
+  double origin_alt = 0.0;            // ENU origin altitude: z = ele - origin_alt
+};
+
+// Everything the reader found, including what LaneMap has no field for.
+struct Lanelet2File {
+  map::LaneMap map;
+  std::map<int64_t, std::string> lanelet_subtype;  // lanelet id -> `subtype` ("road", "crosswalk")
+  std::map<int64_t, std::string> line_tag;         // line id -> "type" or "type:subtype" as read
+  // A way used against its own direction by some lanelet (e.g. the border between two opposite
+  // lanes) is copied, reversed, under a fresh id, so every bound runs in its lanelet's driving
+  // direction as LaneMap requires: copy id -> way id.
+  std::map<int64_t, int64_t> reversed_copy_of;
+  bool used_local_xy = false;  // coordinates came from local_x/local_y tags (mm precision)
+  size_t computed_centres = 0; // lanelets whose centre was averaged from the bounds
+};
+
+// Reads a Lanelet2 OSM file (XML) into ENU metres around (origin_lat, origin_lon,
+// options.origin_alt = 0 by default; a missing `ele` reads as z = 0). All lanelets
+// are read (every subtype); bounds are aligned like Lanelet2 does (right bound turned to run like
+// the left one; both turned when the left one lies on the right), `inverted` member roles are
+// honoured. Throws Lanelet2Error with the path for a missing, unreadable or malformed file or a
+// lanelet that references a missing way or node.
+map::LaneMap readLanelet2(const std::string& path, double origin_lat, double origin_lon);
+map::LaneMap readLanelet2(const std::string& path, double origin_lat, double origin_lon,
+                          const Lanelet2ReadOptions& options);
+Lanelet2File readLanelet2File(const std::string& path, double origin_lat, double origin_lon,
+                              const Lanelet2ReadOptions& options = {});
+
+// The coordinate convention of lanemap's OSM files: `enu` of `frame` -> lat, lon and
+// ele = origin alt + z; and back (the point on the vertical through lat/lon whose ENU z equals
+// ele - origin alt), so a round trip is exact.
+geo::LatLonAlt enuToLatLonEle(const geo::LocalFrame& frame, const Eigen::Vector3d& enu);
+Eigen::Vector3d latLonEleToEnu(const geo::LocalFrame& frame, double lat, double lon, double ele);
+
+}  // namespace lanemap::io

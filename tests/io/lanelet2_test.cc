@@ -1,0 +1,549 @@
+// Tests of the Lanelet2 OSM writer and reader (core/io/lanelet2.h): a hand-made map survives a
+// round trip, the file follows Lanelet2's rules, foreign maps (JOSM ids, reversed bounds, the
+// Lanelet2 project's Karlsruhe example) read correctly, bad input throws with the path.
+#include "core/io/lanelet2.h"
+
+#include <gtest/gtest.h>
+
+#include <osmium/handler.hpp>
+#include <osmium/io/reader.hpp>
+#include <osmium/io/xml_input.hpp>
+#include <osmium/osm/node.hpp>
+#include <osmium/osm/relation.hpp>
+#include <osmium/osm/way.hpp>
+#include <osmium/visitor.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <unistd.h>
+
+namespace lanemap::io {
+namespace {
+
+using map::LaneletKind;
+using map::LaneMap;
+using map::LineType;
+using map::TurnDirection;
+
+const std::string kKarlsruhe = std::string(LANEMAP_DATA_DIR) + "/lanelet2/karlsruhe_mapping_example.osm";
+
+std::filesystem::path tempDir() {
+  return std::filesystem::temp_directory_path() / ("lanemap_io_lanelet2_test_" + std::to_string(::getpid()));
+}
+
+std::string tempPath(const std::string& name) {
+  std::filesystem::create_directories(tempDir());
+  return (tempDir() / name).string();
+}
+
+// Removes the test's scratch folder when the tests are done.
+class ScratchCleanup : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    std::error_code ec;
+    std::filesystem::remove_all(tempDir(), ec);
+  }
+};
+const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+
+void writeText(const std::string& path, const std::string& text) {
+  std::ofstream(path) << text;
+}
+
+map::LineString line(int64_t id, LineType type, std::vector<Eigen::Vector3d> pts) {
+  map::LineString l;
+  l.id = id;
+  l.type = type;
+  l.points = std::move(pts);
+  return l;
+}
+
+// A straight line along x at height y, with a gentle grade (z) so elevations are exercised.
+std::vector<Eigen::Vector3d> alongX(double x0, double x1, double y, int n) {
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < n; ++i) {
+    const double x = x0 + (x1 - x0) * i / (n - 1);
+    pts.emplace_back(x, y + 0.002 * x * x / 50.0, 0.01 * x);
+  }
+  return pts;
+}
+
+// Two eastbound lanes sharing the dashed line 2 (lanelets 100 left, 101 right), and intersection
+// lanelet 102 continuing lanelet 100 straight on; lanelet 101 ends at stop line 6.
+LaneMap handMadeMap() {
+  LaneMap m;
+  m.origin_lat = 49.0;
+  m.origin_lon = 8.4;
+  m.origin_alt = 112.5;
+  m.lines.push_back(line(1, LineType::kSolid, alongX(0, 50, 3.5, 6)));
+  m.lines.push_back(line(2, LineType::kDashed, alongX(0, 50, 0.0, 6)));
+  m.lines.push_back(line(3, LineType::kCurb, alongX(0, 50, -3.5, 6)));
+  m.lines.push_back(line(4, LineType::kVirtual, alongX(50, 70, 3.5, 3)));
+  m.lines.push_back(line(5, LineType::kVirtual, alongX(50, 70, 0.0, 3)));
+  m.lines.push_back(line(6, LineType::kStopLine, {alongX(50, 50, 0.0, 2)[0], alongX(50, 50, -3.5, 2)[0]}));
+  const auto lanelet = [&](int64_t id, int64_t left, int64_t right, int index) {
+    map::Lanelet ll;
+    ll.id = id;
+    ll.left_id = left;
+    ll.right_id = right;
+    ll.index_from_left = index;
+    const auto& l = m.line(left)->points;
+    const auto& r = m.line(right)->points;
+    for (size_t i = 0; i < l.size(); ++i) ll.centre.push_back(0.5 * (l[i] + r[i]));
+    return ll;
+  };
+  auto a = lanelet(100, 1, 2, 0);
+  auto b = lanelet(101, 2, 3, 1);
+  auto c = lanelet(102, 4, 5, 0);
+  for (auto* ll : {&a, &b}) {
+    ll->road_id = 7;
+    ll->from_node = 1001;
+    ll->to_node = 1002;
+  }
+  a.successors = {102};
+  b.stop_line_id = 6;
+  c.kind = LaneletKind::kIntersection;
+  c.turn = TurnDirection::kStraight;
+  c.intersection_id = 1002;
+  m.lanelets = {a, b, c};
+  return m;
+}
+
+// What libosmium sees in a written file.
+struct FileStats : osmium::handler::Handler {
+  size_t nodes = 0, nodes_with_ele = 0, non_positive_ids = 0, ways = 0, relations = 0;
+  std::map<int64_t, std::vector<int64_t>> way_nodes;
+  std::map<int64_t, std::map<std::string, std::string>> relation_tags;
+  std::map<int64_t, std::map<std::string, int64_t>> relation_members;  // role -> way
+  void node(const osmium::Node& n) {
+    ++nodes;
+    nodes_with_ele += n.tags().has_key("ele");
+    non_positive_ids += n.id() <= 0;
+  }
+  void way(const osmium::Way& w) {
+    ++ways;
+    non_positive_ids += w.id() <= 0;
+    for (const auto& nr : w.nodes()) way_nodes[w.id()].push_back(nr.ref());
+  }
+  void relation(const osmium::Relation& r) {
+    ++relations;
+    non_positive_ids += r.id() <= 0;
+    for (const auto& t : r.tags()) relation_tags[r.id()][t.key()] = t.value();
+    for (const auto& m : r.members()) relation_members[r.id()][m.role()] = m.ref();
+  }
+};
+
+FileStats statsOf(const std::string& path) {
+  FileStats s;
+  osmium::io::Reader reader{osmium::io::File{path, "osm"}};
+  osmium::apply(reader, s);
+  reader.close();
+  return s;
+}
+
+double maxPointDistance(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  double worst = 0.0;
+  for (size_t i = 0; i < std::min(a.size(), b.size()); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
+  return worst;
+}
+
+TEST(Lanelet2, RoundTripKeepsGeometryTopologyAndAttributes) {
+  const LaneMap m = handMadeMap();
+  const std::string path = tempPath("roundtrip.osm");
+  writeLanelet2(m, path);
+  const Lanelet2File f = readLanelet2File(path, m.origin_lat, m.origin_lon);
+  const LaneMap& back = f.map;
+
+  ASSERT_EQ(back.lanelets.size(), 3u);
+  ASSERT_EQ(back.lines.size(), 6u);
+  EXPECT_TRUE(f.used_local_xy);
+  EXPECT_TRUE(f.reversed_copy_of.empty());
+  EXPECT_EQ(f.computed_centres, 0u);  // centre lines came back from the centerline ways
+
+  const auto* a = back.lanelet(100);
+  const auto* b = back.lanelet(101);
+  const auto* c = back.lanelet(102);
+  ASSERT_TRUE(a && b && c);
+  // The shared dashed line is one way: the right bound of 100 is the left bound of 101.
+  EXPECT_EQ(a->right_id, 2);
+  EXPECT_EQ(b->left_id, 2);
+  EXPECT_EQ(a->left_id, 1);
+  EXPECT_EQ(b->right_id, 3);
+  // Successors come back from shared end/start points only (Lanelet2 has no successor tags).
+  EXPECT_EQ(a->successors, std::vector<int64_t>{102});
+  EXPECT_TRUE(b->successors.empty());
+  EXPECT_TRUE(c->successors.empty());
+
+  EXPECT_EQ(c->kind, LaneletKind::kIntersection);
+  EXPECT_EQ(c->turn, TurnDirection::kStraight);
+  EXPECT_EQ(c->intersection_id, 1002);
+  EXPECT_EQ(a->kind, LaneletKind::kRoad);
+  EXPECT_EQ(a->road_id, 7);
+  EXPECT_EQ(a->from_node, 1001);
+  EXPECT_EQ(a->to_node, 1002);
+  EXPECT_EQ(b->index_from_left, 1);
+  ASSERT_TRUE(b->stop_line_id.has_value());
+  EXPECT_EQ(*b->stop_line_id, 6);
+  EXPECT_FALSE(a->stop_line_id.has_value());
+
+  // Points within 1 mm: local_x/y and ele are written with 0.1 mm resolution. The read map's
+  // origin altitude is 0, so its z are the written ones plus the writer's origin altitude.
+  const Eigen::Vector3d alt(0, 0, m.origin_alt);
+  for (const auto& l : m.lines) {
+    const auto* r = back.line(l.id);
+    ASSERT_NE(r, nullptr) << l.id;
+    EXPECT_EQ(r->type, l.type) << l.id;
+    std::vector<Eigen::Vector3d> shifted;
+    for (const auto& p : l.points) shifted.push_back(p + alt);
+    EXPECT_LT(maxPointDistance(r->points, shifted), 1e-3) << "line " << l.id;
+  }
+  for (const auto& ll : m.lanelets) {
+    std::vector<Eigen::Vector3d> shifted;
+    for (const auto& p : ll.centre) shifted.push_back(p + alt);
+    EXPECT_LT(maxPointDistance(back.lanelet(ll.id)->centre, shifted), 1e-3) << "lanelet " << ll.id;
+  }
+
+  // Read with the writer's origin altitude: the very same points.
+  Lanelet2ReadOptions same_origin;
+  same_origin.origin_alt = m.origin_alt;
+  const LaneMap exact = readLanelet2(path, m.origin_lat, m.origin_lon, same_origin);
+  EXPECT_EQ(exact.origin_alt, m.origin_alt);
+  for (const auto& l : m.lines) {
+    EXPECT_LT(maxPointDistance(exact.line(l.id)->points, l.points), 1e-3) << "line " << l.id;
+  }
+}
+
+TEST(Lanelet2, WrittenFileFollowsLanelet2Rules) {
+  const LaneMap m = handMadeMap();
+  const std::string path = tempPath("rules.osm");
+  writeLanelet2(m, path);
+
+  std::ifstream in(path);
+  std::string head;
+  std::getline(in, head);
+  std::getline(in, head);
+  EXPECT_EQ(head, "<osm version=\"0.6\" generator=\"lanemap\">");
+
+  const FileStats s = statsOf(path);
+  EXPECT_EQ(s.non_positive_ids, 0u);
+  EXPECT_GT(s.nodes, 0u);
+  EXPECT_EQ(s.nodes_with_ele, s.nodes);
+  EXPECT_EQ(s.ways, 6u + 3u);  // 6 line strings + 3 centre lines
+  EXPECT_EQ(s.relations, 3u);
+  // Successors share nodes: line 1 ends where line 4 starts, line 2 where line 5 starts.
+  EXPECT_EQ(s.way_nodes.at(1).back(), s.way_nodes.at(4).front());
+  EXPECT_EQ(s.way_nodes.at(2).back(), s.way_nodes.at(5).front());
+  // ... and the stop line starts on the end node of the dashed line.
+  EXPECT_EQ(s.way_nodes.at(6).front(), s.way_nodes.at(2).back());
+  // Every point of the map is one node: 6+6+6+3+3 line points, 2 shared with lines 4/5, the stop
+  // line's 2 points both coincide with line ends, centre lines 6+6+3 of which 1 shared (100->102).
+  EXPECT_EQ(s.nodes, (6u + 6u + 6u + 3u + 3u - 2u) + 0u + (6u + 6u + 3u - 1u));
+
+  const auto& tags = s.relation_tags.at(102);
+  EXPECT_EQ(tags.at("type"), "lanelet");
+  EXPECT_EQ(tags.at("subtype"), "road");
+  EXPECT_EQ(tags.at("location"), "urban");
+  EXPECT_EQ(tags.at("one_way"), "yes");
+  EXPECT_EQ(tags.at("turn_direction"), "straight");
+  EXPECT_EQ(s.relation_tags.at(100).count("turn_direction"), 0u);
+  EXPECT_EQ(s.relation_members.at(100).at("left"), 1);
+  EXPECT_EQ(s.relation_members.at(100).at("right"), 2);
+  EXPECT_EQ(s.relation_members.at(101).at("left"), 2);
+  EXPECT_TRUE(std::filesystem::exists(path));
+  // No temporary file left behind by the atomic write.
+  for (const auto& e : std::filesystem::directory_iterator(std::filesystem::path(path).parent_path())) {
+    EXPECT_EQ(e.path().string().find(".tmp."), std::string::npos) << e.path();
+  }
+}
+
+TEST(Lanelet2, RenumbersWhenIdsCollideOrAreNotPositive) {
+  LaneMap m = handMadeMap();
+  // Lanelet ids equal to line ids, and a negative line id: the writer must renumber.
+  std::map<int64_t, int64_t> relabel{{1, -1}, {2, 2}, {3, 3}, {4, 4}, {5, 5}, {6, 6}};
+  for (auto& l : m.lines) l.id = relabel[l.id];
+  for (auto& ll : m.lanelets) {
+    ll.left_id = relabel[ll.left_id];
+    ll.right_id = relabel[ll.right_id];
+  }
+  m.lanelets[0].id = 1;
+  m.lanelets[1].id = 2;
+  m.lanelets[2].id = 3;
+  m.lanelets[0].successors = {3};
+  const std::string path = tempPath("renumbered.osm");
+  writeLanelet2(m, path);
+  const FileStats s = statsOf(path);
+  EXPECT_EQ(s.non_positive_ids, 0u);
+  const LaneMap back = readLanelet2(path, m.origin_lat, m.origin_lon);
+  ASSERT_EQ(back.lanelets.size(), 3u);
+  // Renumbered in vector order: ways 1..6, relations 7..9; topology is kept.
+  EXPECT_EQ(back.lanelets[0].id, 7);
+  EXPECT_EQ(back.lanelets[0].right_id, back.lanelets[1].left_id);
+  EXPECT_EQ(back.lanelets[0].successors, std::vector<int64_t>{9});
+}
+
+TEST(Lanelet2, WriterRejectsInconsistentMaps) {
+  const std::string path = tempPath("bad.osm");
+  {
+    LaneMap m = handMadeMap();
+    m.lanelets[0].left_id = 42;
+    try {
+      writeLanelet2(m, path);
+      FAIL() << "no exception";
+    } catch (const Lanelet2Error& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("42"), std::string::npos) << e.what();
+    }
+  }
+  {
+    LaneMap m = handMadeMap();  // left and right swapped: the left bound lies on the right
+    std::swap(m.lanelets[0].left_id, m.lanelets[0].right_id);
+    EXPECT_EQ(orientationProblems(m).size(), 1u);
+    EXPECT_THROW(writeLanelet2(m, path), Lanelet2Error);
+    Lanelet2WriteOptions lenient;
+    lenient.check_orientation = false;
+    EXPECT_NO_THROW(writeLanelet2(m, path, lenient));
+  }
+  {
+    // A right bound drawn against the driving direction is what Lanelet2 itself aligns (as for a
+    // line shared with a lane of the opposite direction): fine.
+    LaneMap m = handMadeMap();
+    std::reverse(m.lines[2].points.begin(), m.lines[2].points.end());
+    EXPECT_TRUE(orientationProblems(m).empty());
+    // Even both bounds drawn backwards: Lanelet2 turns them back by geometry (left on the left).
+    std::reverse(m.lines[0].points.begin(), m.lines[0].points.end());
+    std::reverse(m.lines[1].points.begin(), m.lines[1].points.end());
+    EXPECT_TRUE(orientationProblems(m).empty());
+    EXPECT_NO_THROW(writeLanelet2(m, path));
+  }
+  EXPECT_TRUE(orientationProblems(handMadeMap()).empty());
+}
+
+// A JOSM-style file: negative ids, no ele, the right bound drawn against the driving direction,
+// a successor found by node id, and one by position only (separate nodes 4 mm apart).
+TEST(Lanelet2, ReadsForeignMapWithNegativeIdsAndReversedBounds) {
+  const geo::LocalFrame frame({49.0, 8.4, 0.0});
+  std::string xml = "<?xml version='1.0' encoding='UTF-8'?>\n<osm version='0.6' generator='JOSM'>\n";
+  const auto node = [&](int id, double x, double y) {
+    const auto ll = frame.toWgs84(Eigen::Vector3d(x, y, 0));
+    char buf[200];
+    std::snprintf(buf, sizeof(buf), "  <node id='%d' lat='%.11f' lon='%.11f' />\n", id, ll.lat, ll.lon);
+    xml += buf;
+  };
+  // Lanelet -100 northbound x in [0,3], y 0..20; -101 continues y 20..40 (shares nodes -3/-4);
+  // -102 continues y 40..60 with its own nodes 4 mm from -101's ends.
+  node(-1, 0, 0); node(-2, 3, 0); node(-3, 0, 20); node(-4, 3, 20);
+  node(-5, 0, 40); node(-6, 3, 40);
+  node(-7, 0.004, 40); node(-8, 3, 40.004); node(-9, 0, 60); node(-10, 3, 60);
+  const auto way = [&](int id, std::vector<int> refs, const char* type, const char* subtype) {
+    xml += "  <way id='" + std::to_string(id) + "'>\n";
+    for (int r : refs) xml += "    <nd ref='" + std::to_string(r) + "' />\n";
+    xml += std::string("    <tag k='type' v='") + type + "' />\n";
+    if (subtype) xml += std::string("    <tag k='subtype' v='") + subtype + "' />\n";
+    xml += "  </way>\n";
+  };
+  way(-20, {-1, -3}, "line_thin", "solid");  // left of -100 (x = 0 is the left when heading north)
+  way(-21, {-4, -2}, "curbstone", "high");   // right of -100, drawn southwards
+  way(-22, {-3, -5}, "line_thin", "dashed");
+  way(-23, {-4, -6}, "virtual", nullptr);
+  way(-24, {-7, -9}, "road_border", nullptr);
+  way(-25, {-10, -8}, "line_thin", "solid_solid");  // drawn southwards
+  const auto lanelet = [&](int id, int left, int right, const char* subtype) {
+    xml += "  <relation id='" + std::to_string(id) + "'>\n";
+    xml += "    <member type='way' ref='" + std::to_string(left) + "' role='left' />\n";
+    xml += "    <member type='way' ref='" + std::to_string(right) + "' role='right' />\n";
+    xml += "    <tag k='type' v='lanelet' />\n";
+    xml += std::string("    <tag k='subtype' v='") + subtype + "' />\n";
+    xml += "  </relation>\n";
+  };
+  lanelet(-100, -20, -21, "road");
+  lanelet(-101, -22, -23, "road");
+  lanelet(-102, -24, -25, "bicycle_lane");
+  xml += "</osm>\n";
+  const std::string path = tempPath("josm.osm");
+  writeText(path, xml);
+
+  const Lanelet2File f = readLanelet2File(path, 49.0, 8.4);
+  ASSERT_EQ(f.map.lanelets.size(), 3u);
+  EXPECT_FALSE(f.used_local_xy);
+  EXPECT_EQ(f.computed_centres, 3u);
+  EXPECT_EQ(f.lanelet_subtype.at(-102), "bicycle_lane");
+  const auto* first = f.map.lanelet(-100);
+  ASSERT_NE(first, nullptr);
+  EXPECT_EQ(first->successors, std::vector<int64_t>{-101});
+  EXPECT_EQ(f.map.lanelet(-101)->successors, std::vector<int64_t>{-102});  // 4 mm < 1 cm
+  EXPECT_TRUE(f.map.lanelet(-102)->successors.empty());
+  // The southward right bound of -100 is read northwards (only this lanelet uses that way, so the
+  // way itself is reversed and keeps its id).
+  const auto* right = f.map.line(first->right_id);
+  ASSERT_NE(right, nullptr);
+  EXPECT_EQ(right->id, -21);
+  EXPECT_EQ(right->type, LineType::kCurb);
+  EXPECT_NEAR(right->points.front().y(), 0.0, 0.02);  // osmium keeps 7 decimals (~1 cm)
+  EXPECT_NEAR(right->points.back().y(), 20.0, 0.02);
+  EXPECT_EQ(f.map.line(-25)->type, LineType::kSolidSolid);
+  EXPECT_EQ(f.map.line(-24)->type, LineType::kCurb);
+  // Centre line: mid-lane, northwards, 1 m spacing over 20 m -> 21 points.
+  ASSERT_EQ(first->centre.size(), 21u);
+  EXPECT_NEAR(first->centre.front().x(), 1.5, 0.02);
+  EXPECT_NEAR(first->centre.front().y(), 0.0, 0.02);
+  EXPECT_NEAR(first->centre.back().y(), 20.0, 0.02);
+  EXPECT_NEAR(first->centre[10].y(), 10.0, 0.02);
+  // Filtering by subtype.
+  Lanelet2ReadOptions roads;
+  roads.subtypes = {"road"};
+  EXPECT_EQ(readLanelet2(path, 49.0, 8.4, roads).lanelets.size(), 2u);
+}
+
+// Point-in-polygon (even-odd), xy.
+bool inside(const std::vector<Eigen::Vector2d>& ring, const Eigen::Vector2d& p) {
+  bool in = false;
+  for (size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const auto& a = ring[i];
+    const auto& b = ring[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
+      in = !in;
+    }
+  }
+  return in;
+}
+
+double distanceToRing(const std::vector<Eigen::Vector2d>& ring, const Eigen::Vector2d& p) {
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < ring.size(); ++i) {
+    const Eigen::Vector2d a = ring[i], b = ring[(i + 1) % ring.size()];
+    const double len2 = (b - a).squaredNorm();
+    const double t = len2 > 0 ? std::clamp((p - a).dot(b - a) / len2, 0.0, 1.0) : 0.0;
+    best = std::min(best, (a + t * (b - a) - p).norm());
+  }
+  return best;
+}
+
+TEST(Lanelet2, ReadsKarlsruheExample) {
+  const Lanelet2File f = readLanelet2File(kKarlsruhe, 49.0, 8.4);
+  // grep -c "<tag k='type' v='lanelet' />" data/lanelet2/karlsruhe_mapping_example.osm  -> 371
+  EXPECT_EQ(f.map.lanelets.size(), 371u);
+  // Lanelets per subtype, from the relation blocks of the file:
+  //   awk "/<relation /{r=1;t=\"\";s=\"\"} r&&/k='type'/{match(\$0,/v='[^']*'/);t=substr(\$0,RSTART+3,RLENGTH-4)}
+  //        r&&/k='subtype'/{match(\$0,/v='[^']*'/);s=substr(\$0,RSTART+3,RLENGTH-4)}
+  //        /<\/relation>/{if(t==\"lanelet\")print s; r=0}" FILE | sort | uniq -c
+  //   -> 14 bicycle_lane, 8 crosswalk, 8 highway, 2 rail, 337 road, 2 walkway
+  std::map<std::string, size_t> per_subtype;
+  for (const auto& [id, subtype] : f.lanelet_subtype) ++per_subtype[subtype];
+  EXPECT_EQ(per_subtype["road"], 337u);
+  EXPECT_EQ(per_subtype["bicycle_lane"], 14u);
+  EXPECT_EQ(per_subtype["crosswalk"], 8u);
+  EXPECT_EQ(per_subtype["highway"], 8u);
+  EXPECT_EQ(f.map.lanelets.size(), f.lanelet_subtype.size());
+  EXPECT_FALSE(f.used_local_xy);
+  // Lanelet2's validator reports no issue on this map, so every lanelet is well oriented after
+  // alignment.
+  EXPECT_TRUE(orientationProblems(f.map).empty());
+
+  Lanelet2ReadOptions roads_only;
+  roads_only.subtypes = {"road"};
+  const LaneMap roads = readLanelet2(kKarlsruhe, 49.0, 8.4, roads_only);
+  ASSERT_EQ(roads.lanelets.size(), 337u);
+  size_t with_successor = 0;
+  for (const auto& ll : roads.lanelets) {
+    const auto* left = roads.line(ll.left_id);
+    const auto* right = roads.line(ll.right_id);
+    ASSERT_TRUE(left && right) << ll.id;
+    ASSERT_GE(ll.centre.size(), 2u) << ll.id;
+    std::vector<Eigen::Vector2d> ring;
+    for (const auto& p : left->points) ring.push_back(p.head<2>());
+    for (auto it = right->points.rbegin(); it != right->points.rend(); ++it) ring.push_back(it->head<2>());
+    for (const auto& c : ll.centre) {
+      // Inside, or within 5 cm of the outline: the first and last centre points lie exactly on
+      // the lanelet's start/end edges, and 7-decimal coordinates move points by up to ~1 cm.
+      EXPECT_TRUE(inside(ring, c.head<2>()) || distanceToRing(ring, c.head<2>()) < 0.05)
+          << "lanelet " << ll.id << " centre point " << c.transpose();
+    }
+    with_successor += !ll.successors.empty();
+  }
+  // The map is about 3.4 km x 1 km east/north of the origin (49 N, 8.4 E).
+  const auto& p = roads.lanelets.front().centre.front();
+  EXPECT_GT(p.x(), 900.0);
+  EXPECT_LT(p.x(), 4400.0);
+  EXPECT_GT(p.y(), 150.0);
+  EXPECT_LT(p.y(), 1300.0);
+  // Most road lanelets continue into another one (the rest end at the map's border).
+  EXPECT_GT(with_successor, roads.lanelets.size() * 3 / 4);
+}
+
+TEST(Lanelet2, KarlsruheSurvivesOurWriterAndReader) {
+  Lanelet2ReadOptions roads_only;
+  roads_only.subtypes = {"road"};
+  const LaneMap first = readLanelet2(kKarlsruhe, 49.0, 8.4, roads_only);
+  const std::string path = tempPath("karlsruhe_again.osm");
+  writeLanelet2(first, path);
+  const LaneMap second = readLanelet2(path, 49.0, 8.4);
+  ASSERT_EQ(second.lanelets.size(), first.lanelets.size());
+  for (size_t i = 0; i < first.lanelets.size(); ++i) {
+    const auto& a = first.lanelets[i];
+    const auto& b = second.lanelets[i];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.successors, b.successors) << a.id;
+    EXPECT_EQ(a.left_id, b.left_id);
+    EXPECT_EQ(a.right_id, b.right_id);
+    EXPECT_LT(maxPointDistance(a.centre, b.centre), 1e-3) << a.id;
+  }
+}
+
+TEST(Lanelet2, BadFilesThrowWithThePath) {
+  const auto expectThrowNaming = [](const std::string& path, const std::string& extra) {
+    try {
+      readLanelet2(path, 49.0, 8.4);
+      FAIL() << "no exception for " << path;
+    } catch (const Lanelet2Error& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(extra), std::string::npos) << e.what();
+    }
+  };
+  expectThrowNaming(tempPath("does_not_exist.osm"), "no such file");
+
+  const std::string truncated = tempPath("truncated.osm");
+  writeText(truncated, "<?xml version='1.0'?>\n<osm version='0.6'>\n  <node id='1' lat='49.0' lon='8.4'>\n  <way");
+  expectThrowNaming(truncated, "");
+
+  const std::string not_xml = tempPath("not_xml.osm");
+  writeText(not_xml, "this is not an OSM file\n");
+  expectThrowNaming(not_xml, "");
+
+  const std::string missing_way = tempPath("missing_way.osm");
+  writeText(missing_way,
+            "<?xml version='1.0'?>\n<osm version='0.6'>\n"
+            "  <relation id='5'><member type='way' ref='77' role='left'/>"
+            "<member type='way' ref='78' role='right'/><tag k='type' v='lanelet'/></relation>\n</osm>\n");
+  expectThrowNaming(missing_way, "77");
+
+  const std::string bad_tag = tempPath("bad_tag.osm");
+  writeLanelet2(handMadeMap(), bad_tag);
+  std::ifstream in(bad_tag);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string key = "k=\"lanemap:road_id\" v=\"7\"";
+  ASSERT_NE(text.find(key), std::string::npos);
+  text.replace(text.find(key), key.size(), "k=\"lanemap:road_id\" v=\"seven\"");
+  writeText(bad_tag, text);
+  expectThrowNaming(bad_tag, "seven");
+}
+
+TEST(Lanelet2, CoordinateConventionRoundTripsExactly) {
+  const geo::LocalFrame frame({49.0, 8.4, 250.0});
+  const geo::LocalFrame ground({49.0, 8.4, 0.0});
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(3000, -2000, 12.5),
+                                  Eigen::Vector3d(-150, 800, -3)}) {
+    const geo::LatLonAlt g = enuToLatLonEle(frame, p);
+    EXPECT_NEAR(g.alt, 250.0 + p.z(), 1e-9);
+    // Back in the same frame: the same point (tolerance: floating point, micrometres).
+    EXPECT_LT((latLonEleToEnu(frame, g.lat, g.lon, g.alt) - p).norm(), 1e-6);
+    // In a frame at the same lat/lon but altitude 0: the same x/y, z shifted by 250 m.
+    EXPECT_LT((latLonEleToEnu(ground, g.lat, g.lon, g.alt) - (p + Eigen::Vector3d(0, 0, 250))).norm(), 1e-6);
+  }
+}
+
+}  // namespace
+}  // namespace lanemap::io

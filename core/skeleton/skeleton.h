@@ -65,6 +65,9 @@ struct SkeletonOptions {
 // perpendicular road must be about 3 m closer to beat the one the car drives along.
 inline constexpr double kHeadingWeightMPerRad = 2.0;
 
+// Crossing-number point-in-polygon test (ROI polygons).
+bool pointInPolygon(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p);
+
 class Skeleton {
  public:
   // Throws osm::OsmError when the data has no drivable way or the graph cannot be built.
@@ -84,6 +87,10 @@ class Skeleton {
   // 0 = east, counter-clockwise) by distance + kHeadingWeightMPerRad * |heading_error|.
   std::vector<RoadMatch> nearestRoads(const Eigen::Vector2d& p, double max_distance,
                                       std::optional<double> heading = std::nullopt) const;
+  // p projected on one road: distance, arc length s of the closest point, and the heading error
+  // when a heading is given. road_id = -1 for an unknown road.
+  RoadMatch project(int64_t road_id, const Eigen::Vector2d& p,
+                    std::optional<double> heading = std::nullopt) const;
   // The intersection whose ROI contains p, or nullptr.
   const Intersection* intersectionContaining(const Eigen::Vector2d& p) const;
 

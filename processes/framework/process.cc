@@ -174,6 +174,7 @@ int Process::spin() {
   auto next_status = std::chrono::steady_clock::now();
   while (!g_stop.load()) {
     const int rc = lcm_->handleTimeout(100);
+    if (rc < 0 && g_stop.load()) break;  // a signal interrupted the wait
     if (rc < 0) {
       std::cerr << name_ << ": LCM handle failed\n";
       return 1;

@@ -1,0 +1,140 @@
+// lanemap-road-tracker: map-matches POSE messages to the OSM skeleton M0 and publishes ROAD_EVENT
+// (entered road / reached intersection / left map / wrong way / pose lost). A thin wrapper over
+// core/tracking/road_tracker.h; counters in STATUS.
+//
+//   lanemap-road-tracker --config config/road_tracker.yaml [--osm data/osm/west-oakland.osm]
+#include "core/skeleton/skeleton.h"
+#include "core/tracking/road_tracker.h"
+#include "lanemap/pose_t.hpp"
+#include "lanemap/road_event_t.hpp"
+#include "processes/framework/channels.h"
+#include "processes/framework/process.h"
+
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <string>
+
+namespace {
+
+using lanemap::tracking::RoadTrackerConfig;
+
+template <typename T>
+void read(const YAML::Node& node, const char* key, T& value) {
+  if (node && node[key]) value = node[key].as<T>();
+}
+
+RoadTrackerConfig trackerConfig(const YAML::Node& n) {
+  RoadTrackerConfig c;
+  read(n, "measurement_sigma_m", c.measurement_sigma_m);
+  read(n, "acceleration_sigma", c.acceleration_sigma);
+  read(n, "acquire_distance_m", c.acquire_distance_m);
+  read(n, "acquire_heading_rad", c.acquire_heading_rad);
+  read(n, "exit_distance_m", c.exit_distance_m);
+  read(n, "exit_heading_rad", c.exit_heading_rad);
+  read(n, "u_turn_heading_rad", c.u_turn_heading_rad);
+  read(n, "exit_ambiguity_m", c.exit_ambiguity_m);
+  read(n, "exit_commit_m", c.exit_commit_m);
+  read(n, "switch_margin_m", c.switch_margin_m);
+  read(n, "switch_time_s", c.switch_time_s);
+  read(n, "left_map_distance_m", c.left_map_distance_m);
+  read(n, "left_map_time_s", c.left_map_time_s);
+  read(n, "wrong_way_heading_rad", c.wrong_way_heading_rad);
+  read(n, "wrong_way_time_s", c.wrong_way_time_s);
+  read(n, "pose_gap_s", c.pose_gap_s);
+  read(n, "max_innovation_m", c.max_innovation_m);
+  return c;
+}
+
+class RoadTrackerApp {
+ public:
+  RoadTrackerApp(lanemap::Process& process, std::unique_ptr<lanemap::skeleton::Skeleton> skeleton,
+                 const RoadTrackerConfig& config, const std::string& pose_channel, int queue)
+      : process_(process), skeleton_(std::move(skeleton)), tracker_(*skeleton_, config) {
+    auto* sub = process_.lcm().subscribe(pose_channel, &RoadTrackerApp::onPose, this);
+    sub->setQueueCapacity(queue);
+  }
+
+ private:
+  void onPose(const lcm::ReceiveBuffer*, const std::string&, const lanemap::pose_t* msg) {
+    auto& counters = process_.counters();
+    counters.add("poses_received");
+    lanemap::tracking::PoseInput pose;
+    pose.utime = msg->utime;
+    pose.valid = msg->status != lanemap::pose_t::STATUS_INVALID && std::isfinite(msg->latitude) &&
+                 std::isfinite(msg->longitude);
+    if (pose.valid) {
+      pose.position = skeleton_->frame().toEnu(msg->latitude, msg->longitude, msg->altitude).head<2>();
+      // Orientation rotates vehicle -> ENU: the vehicle x axis in ENU is R's first column.
+      const double w = msg->orientation[0], x = msg->orientation[1], y = msg->orientation[2],
+                   z = msg->orientation[3];
+      pose.heading = std::atan2(2.0 * (x * y + w * z), 1.0 - 2.0 * (y * y + z * z));
+      pose.velocity = Eigen::Vector2d(msg->velocity_enu[0], msg->velocity_enu[1]);
+    }
+    for (const auto& e : tracker_.update(pose)) publish(e);
+    const auto& stats = tracker_.stats();
+    counters.set("poses_invalid", stats.invalid);
+    counters.set("poses_out_of_order", stats.out_of_order);
+    counters.set("filter_resets", stats.filter_resets);
+    counters.set("rematches", stats.rematches);
+    counters.set("current_road", tracker_.currentRoad());
+    process_.latency().add((lanemap::nowUtime() - msg->utime) * 1e-3);
+  }
+
+  void publish(const lanemap::tracking::RoadEvent& e) {
+    lanemap::road_event_t msg;
+    msg.utime = e.utime;
+    msg.type = static_cast<int8_t>(e.type);
+    msg.road_id = e.road_id;
+    msg.from_node = e.from_node;
+    msg.to_node = e.to_node;
+    msg.previous_road_id = e.previous_road_id;
+    msg.intersection_id = e.intersection_id;
+    msg.distance_m = e.distance_m;
+    msg.detail = e.detail;
+    if (e.crossing_utime != e.utime) {
+      msg.detail += (msg.detail.empty() ? "" : "; ") + std::string("crossing_utime=") +
+                    std::to_string(e.crossing_utime);
+    }
+    process_.lcm().publish(lanemap::channels::kRoadEvent, &msg);
+    process_.counters().add(std::string("events_") + lanemap::tracking::toString(e.type));
+  }
+
+  lanemap::Process& process_;
+  std::unique_ptr<lanemap::skeleton::Skeleton> skeleton_;
+  lanemap::tracking::RoadTracker tracker_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  lanemap::Process process("road_tracker");
+  std::string osm_flag;
+  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: config osm)");
+  if (int rc = process.init(argc, argv); rc >= 0) return rc;
+  try {
+    const YAML::Node& config = process.config();
+    std::string osm = osm_flag;
+    if (osm.empty()) read(config, "osm", osm);
+    if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the config");
+    lanemap::skeleton::SkeletonOptions options;
+    read(config, "junction_merge_radius_m", options.junction_merge_radius_m);
+    if (config["origin"]) {
+      options.origin = lanemap::geo::LatLonAlt{config["origin"]["lat"].as<double>(),
+                                               config["origin"]["lon"].as<double>(), 0.0};
+    }
+    auto skeleton = std::make_unique<lanemap::skeleton::Skeleton>(
+        lanemap::skeleton::Skeleton::build(lanemap::osm::readOsm(osm), options));
+    std::string pose_channel = lanemap::channels::kPose;
+    int queue = 1000;
+    read(config, "pose_channel", pose_channel);
+    read(config, "queue_capacity", queue);
+    std::cerr << "road_tracker: " << skeleton->roads().size() << " atomic roads, "
+              << skeleton->intersections().size() << " intersections from " << osm << "\n";
+    RoadTrackerApp app(process, std::move(skeleton), trackerConfig(config["tracker"]), pose_channel, queue);
+    return process.spin();
+  } catch (const std::exception& e) {
+    std::cerr << "road_tracker: " << e.what() << "\n";
+    return 2;
+  }
+}

@@ -5,7 +5,7 @@
 #include "core/tracking/road_tracker.h"
 #include "lanemap/road_event_t.hpp"
 #include "tests/common/netns.h"
-#include "tests/drivers/driver_test_util.h"
+#include "tests/common/child_process.h"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>

@@ -26,10 +26,7 @@ TEST(LogPlayer, ReplayDeliversEveryChannelAtItsRate) {
     return;
   }
   TempDir dir("replay");
-  const auto sim = runCommand(binPath("lanemap-sim") + " -q --osm " + dataPath("osm/west-oakland.osm") +
-                              " --out " + dir.str("drive") + " --duration 8 --seed 5");
-  ASSERT_EQ(sim.exit_code, 0) << sim.output;
-  const std::string log = dir.str("drive/drive.lcmlog");
+  const std::string log = sharedSimDrive("osm/west-oakland.osm", 8.0, 5) + "/drive.lcmlog";
   ASSERT_EQ(runCommand(binPath("lanemap-lcm-stats") + " --log " + log + " --json " + dir.str("log.json")).exit_code, 0);
 
   const std::string url = testUdpmUrl(7668);

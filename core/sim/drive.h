@@ -1,0 +1,99 @@
+// The simulated car's drive: a route through the street network (atomic roads), the lanes it takes
+// (lanelets of the ground-truth map, with lane changes), and its trajectory in time (position,
+// orientation on the non-flat ground, speed), from which poses and sensor frames are sampled.
+#pragma once
+
+#include "core/map/lane_map.h"
+#include "core/sim/world.h"
+#include "core/skeleton/skeleton.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace lanemap::sim {
+
+class RouteError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct DriveOptions {
+  uint64_t seed = 1;
+  double duration_s = 120.0;         // the drive stops at the end of the route or after this
+  double cruise_speed_mps = 11.0;    // ~40 km/h, urban
+  double max_lateral_accel = 2.0;    // m/s^2: slows down in curves and turns
+  double accel = 1.5;                // m/s^2 from standstill and after turns
+  double lane_change_length_m = 30.0;
+  // Auto routes: chance of a lane change on a road lanelet of 40 m or more with a neighbour lane.
+  // Given routes: spread of the seeded lane preferences (lanes cost 1 +- this per metre).
+  double lane_change_probability = 0.35;
+  std::vector<int64_t> route_nodes;  // intersection ids to pass through, in order; empty: auto
+
+  // Reads the keys present in a `drive` node (config/sim_drive.yaml); others keep their defaults.
+  static DriveOptions fromYaml(const YAML::Node& node);
+};
+
+// One sample of the car's true motion. The vehicle frame: x forward, y left, z up, origin at the
+// rear axle on the ground.
+struct VehicleState {
+  double t = 0.0;                      // seconds since the drive's start
+  Eigen::Isometry3d vehicle_to_enu = Eigen::Isometry3d::Identity();
+  double speed = 0.0;                  // m/s
+  double yaw_rate = 0.0;               // rad/s
+  int64_t lanelet = -1;                // the lanelet the car is in (ego lane)
+  int64_t road_id = -1;                // the atomic road, -1 inside an intersection
+};
+
+// The lanelets the car drives through and where in each it changes lane.
+struct LanePlan {
+  struct Leg {
+    int64_t lanelet = -1;
+    bool lane_change_to_next = false;  // the next leg is a neighbour lane (same road)
+  };
+  std::vector<Leg> legs;
+  std::vector<int64_t> roads;          // atomic road ids in order (the route)
+  std::vector<int64_t> intersections;  // intersection ids passed, in order (ends of the roads)
+};
+
+// Plans the route and its lanes. Auto (options.route_nodes empty): a seeded random walk over the
+// lane graph that turns where its lane allows, changes lanes now and then, avoids U-turns, dead
+// ends and roads already driven where it can, long enough for duration_s at cruise speed. With
+// route_nodes: through those intersections in order (fewest roads between consecutive ones, then
+// the cheapest lanes); throws RouteError, naming where it fails, when that is impossible.
+LanePlan planDrive(const skeleton::Skeleton& skeleton, const map::LaneMap& truth,
+                   const DriveOptions& options);
+
+// The car's true motion along a LanePlan on the World's surface, sampled at any time.
+class Trajectory {
+ public:
+  Trajectory(const map::LaneMap& truth, const World& world, const LanePlan& plan,
+             const DriveOptions& options);
+
+  double duration() const { return duration_; }
+  double length() const { return s_.empty() ? 0.0 : s_.back(); }
+  VehicleState at(double t) const;
+
+ private:
+  struct PathPoint {
+    Eigen::Vector2d p;
+    int64_t lanelet;
+    int64_t road_id;
+  };
+  double arcLengthAt(double t) const;
+  Eigen::Isometry3d poseAt(double s) const;
+
+  const World& world_;
+  std::vector<PathPoint> path_;  // dense, ~0.5 m apart
+  std::vector<double> s_;        // arc length of each path point
+  std::vector<double> t_of_s_;   // time at each path point (speed profile)
+  double duration_ = 0.0;
+};
+
+}  // namespace lanemap::sim

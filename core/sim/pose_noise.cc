@@ -1,0 +1,42 @@
+#include "core/sim/pose_noise.h"
+
+#include <cmath>
+
+namespace lanemap::sim {
+
+PoseNoiseOptions PoseNoiseOptions::fromYaml(const YAML::Node& n) {
+  PoseNoiseOptions o;
+  if (!n) return o;
+  auto get = [&n](const char* key, double& v) {
+    if (n[key]) v = n[key].as<double>();
+  };
+  get("position_sigma_m", o.position_sigma_m);
+  get("altitude_sigma_m", o.altitude_sigma_m);
+  get("bias_sigma_m", o.bias_sigma_m);
+  get("bias_time_constant_s", o.bias_time_constant_s);
+  get("yaw_sigma_deg", o.yaw_sigma_deg);
+  get("attitude_sigma_deg", o.attitude_sigma_deg);
+  return o;
+}
+
+PoseNoise::PoseNoise(const PoseNoiseOptions& options, uint64_t seed)
+    : options_(options), rng_(seed * 104729 + 3) {
+  bias_ = Eigen::Vector2d(unit_(rng_), unit_(rng_)) * options_.bias_sigma_m;
+}
+
+PoseError PoseNoise::next(double dt) {
+  // Gauss-Markov: b <- a b + sqrt(1 - a^2) sigma w keeps the bias's std at bias_sigma_m.
+  const double a = options_.bias_time_constant_s > 0 ? std::exp(-dt / options_.bias_time_constant_s) : 0.0;
+  const double q = std::sqrt(std::max(0.0, 1.0 - a * a)) * options_.bias_sigma_m;
+  bias_ = a * bias_ + q * Eigen::Vector2d(unit_(rng_), unit_(rng_));
+  PoseError e;
+  e.position.x() = bias_.x() + options_.position_sigma_m * unit_(rng_);
+  e.position.y() = bias_.y() + options_.position_sigma_m * unit_(rng_);
+  e.position.z() = options_.altitude_sigma_m * unit_(rng_);
+  const double deg = M_PI / 180.0;
+  e.rpy = Eigen::Vector3d(options_.attitude_sigma_deg * unit_(rng_), options_.attitude_sigma_deg * unit_(rng_),
+                          options_.yaw_sigma_deg * unit_(rng_)) * deg;
+  return e;
+}
+
+}  // namespace lanemap::sim

@@ -1,0 +1,43 @@
+// GNSS/INS-like pose errors for the simulator: white noise plus a slowly wandering bias
+// (a first-order Gauss-Markov process), seeded and deterministic.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <random>
+
+namespace lanemap::sim {
+
+struct PoseNoiseOptions {
+  double position_sigma_m = 0.03;     // white noise per axis, horizontal
+  double altitude_sigma_m = 0.05;
+  double bias_sigma_m = 0.10;         // steady-state std of the wandering horizontal bias
+  double bias_time_constant_s = 30.0;
+  double yaw_sigma_deg = 0.1;
+  double attitude_sigma_deg = 0.05;   // roll and pitch
+  static PoseNoiseOptions fromYaml(const YAML::Node& node);  // missing keys keep defaults
+};
+
+struct PoseError {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // ENU metres
+  Eigen::Vector3d rpy = Eigen::Vector3d::Zero();       // radians
+};
+
+class PoseNoise {
+ public:
+  PoseNoise(const PoseNoiseOptions& options, uint64_t seed);
+  // The error of the next pose, dt seconds after the previous one.
+  PoseError next(double dt);
+  const PoseNoiseOptions& options() const { return options_; }
+
+ private:
+  PoseNoiseOptions options_;
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> unit_{0.0, 1.0};
+  Eigen::Vector2d bias_ = Eigen::Vector2d::Zero();
+};
+
+}  // namespace lanemap::sim

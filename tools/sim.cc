@@ -1,0 +1,320 @@
+// lanemap-sim: simulates a data-collection drive over a street network from an OSM file and writes
+//   <out>/drive.lcmlog      CAMERA_FRONT (JPEG), SEMANTIC_FRONT_TRUTH, LIDAR_PACKETS, POSE
+//   <out>/groundtruth.osm   the true lane-level map (Lanelet2)
+//   <out>/groundtruth.png   a picture of it over the street network
+//   <out>/roads.osm         the road-level OSM the mapper is given (no lane tags by default)
+//   <out>/trajectory.csv    the true motion at 10 Hz (for tests and evaluation)
+//   <out>/scenario.json     route, seed, options, counts
+// Everything is checked (OSM, route) before anything is written; output goes to a temporary
+// folder renamed into place at the end, so a failed run leaves nothing behind.
+#include "core/io/lanelet2.h"
+#include "core/io/map_png.h"
+#include "core/io/road_osm_writer.h"
+#include "core/osm/osm_data.h"
+#include "core/sim/drive.h"
+#include "core/sim/simulator.h"
+#include "core/sim/world_builder.h"
+#include "core/skeleton/skeleton.h"
+#include "lanemap/image_t.hpp"
+#include "lanemap/label_image_t.hpp"
+#include "lanemap/lidar_packets_t.hpp"
+#include "lanemap/pose_t.hpp"
+#include "processes/framework/channels.h"
+#include "processes/framework/process.h"
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <iostream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using namespace lanemap;
+
+namespace {
+
+// Writes every measurement to an LCM log file as the car's drivers would have published it.
+class LogSink : public sim::SensorSink {
+ public:
+  explicit LogSink(const std::string& path) : log_(path, "w") {
+    if (!log_.good()) throw std::runtime_error("cannot write LCM log '" + path + "'");
+  }
+  void onPose(const sim::PoseMeasurement& m) override {
+    pose_t msg{};
+    msg.utime = m.utime;
+    msg.latitude = m.wgs84.lat;
+    msg.longitude = m.wgs84.lon;
+    msg.altitude = m.wgs84.alt;
+    msg.orientation[0] = m.orientation.w();
+    msg.orientation[1] = m.orientation.x();
+    msg.orientation[2] = m.orientation.y();
+    msg.orientation[3] = m.orientation.z();
+    for (int i = 0; i < 3; ++i) {
+      msg.velocity_enu[i] = m.velocity_enu[i];
+      msg.angular_rate[i] = m.angular_rate[i];
+    }
+    const double pv = m.position_sigma_m * m.position_sigma_m;
+    msg.position_covariance[0] = msg.position_covariance[4] = pv;
+    msg.position_covariance[8] = 4.0 * pv;
+    msg.orientation_covariance[8] = m.yaw_sigma_rad * m.yaw_sigma_rad;
+    msg.status = pose_t::STATUS_SIMULATED;
+    write(channels::kPose, m.utime, msg);
+  }
+  void onCamera(const sim::CameraMeasurement& m) override {
+    image_t img;
+    img.utime = m.utime;
+    img.seq = m.seq;
+    img.width = m.width;
+    img.height = m.height;
+    img.row_stride = 0;
+    img.pixelformat = image_t::PIXEL_FORMAT_JPEG;
+    img.data = m.jpeg;
+    img.size = static_cast<int32_t>(img.data.size());
+    write(channels::kCameraFront, m.utime, img);
+    label_image_t lab;
+    lab.utime = m.utime;
+    lab.seq = m.seq;
+    lab.width = m.width;
+    lab.height = m.height;
+    lab.encoding = label_image_t::ENCODING_PNG;
+    lab.data = m.labels_png;
+    lab.size = static_cast<int32_t>(lab.data.size());
+    lab.source = "sim-truth";
+    write(channels::kSemanticFrontTruth, m.utime, lab);
+  }
+  void onLidar(const sim::LidarMeasurement& m) override {
+    lidar_packets_t msg;
+    msg.utime = m.utime;
+    msg.model = "VLP-16";
+    msg.num_packets = static_cast<int32_t>(m.packets.size());
+    msg.packet_size = lidar::kDataPacketSize;
+    msg.packet_utime = m.packet_utime;
+    for (const auto& p : m.packets) msg.data.emplace_back(p.begin(), p.end());
+    write(channels::kLidarPackets, m.publish_utime, msg);
+  }
+
+ private:
+  template <typename T>
+  void write(const char* channel, int64_t timestamp, const T& msg) {
+    std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
+    msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    lcm::LogEvent ev;
+    ev.eventnum = eventnum_++;
+    ev.timestamp = timestamp;
+    ev.channel = channel;
+    ev.datalen = static_cast<int32_t>(buf.size());
+    ev.data = buf.data();
+    if (log_.writeEvent(&ev) != 0) throw std::runtime_error("writing the LCM log failed (disk full?)");
+  }
+  lcm::LogFile log_;
+  int64_t eventnum_ = 0;
+};
+
+std::vector<int64_t> parseRoute(const std::string& text) {
+  std::vector<int64_t> ids;
+  if (text.empty() || text == "auto") return ids;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      size_t used = 0;
+      ids.push_back(std::stoll(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw sim::RouteError("--route: '" + item + "' is not an OSM node id (use auto or id,id,...)");
+    }
+  }
+  return ids;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app(
+      "lanemap-sim: simulate a data-collection drive over the street network of an OSM file.\n"
+      "Writes drive.lcmlog, groundtruth.osm (Lanelet2), groundtruth.png, roads.osm, trajectory.csv\n"
+      "and scenario.json into --out. Deterministic for a seed.");
+  std::string osm_path, out_dir, route_text = "auto";
+  std::string vehicle_path = std::string(LANEMAP_SOURCE_DIR) + "/config/vehicle.yaml";
+  std::string world_path = std::string(LANEMAP_SOURCE_DIR) + "/config/sim_world.yaml";
+  std::string drive_path = std::string(LANEMAP_SOURCE_DIR) + "/config/sim_drive.yaml";
+  uint64_t seed = 1;
+  double duration = 120.0, camera_hz = 10.0, pose_hz = 100.0;
+  bool no_lidar = false, flat = false, keep_lane_tags = false, force = false, quiet = false;
+  app.add_option("--osm", osm_path, "road network (.osm or .osm.pbf)")->required();
+  app.add_option("--out", out_dir, "output folder (must not exist or be empty, unless --force)")->required();
+  app.add_option("--route", route_text, "auto, or intersection node ids to pass through: id,id,...");
+  app.add_option("--seed", seed, "random seed: world irregularities, route, noise");
+  app.add_option("--duration", duration, "longest drive, seconds")->check(CLI::PositiveNumber);
+  app.add_option("--camera-hz", camera_hz, "camera frame rate")->check(CLI::Range(0.1, 60.0));
+  app.add_option("--pose-hz", pose_hz, "pose rate")->check(CLI::Range(0.1, 1000.0));
+  app.add_flag("--no-lidar", no_lidar, "no LIDAR_PACKETS");
+  app.add_flag("--flat", flat, "a flat world: no grades, crown or bumps");
+  app.add_flag("--keep-lane-tags", keep_lane_tags, "roads.osm keeps lanes/turn:lanes/width tags");
+  app.add_option("--vehicle", vehicle_path, "camera and LIDAR config");
+  app.add_option("--world-config", world_path, "world generation config");
+  app.add_option("--drive-config", drive_path, "driving style and pose noise config");
+  app.add_flag("--force", force, "replace a non-empty --out");
+  app.add_flag("-q,--quiet", quiet, "no progress");
+  CLI11_PARSE(app, argc, argv);
+
+  const auto t_start = std::chrono::steady_clock::now();
+  fs::path out(out_dir);
+  fs::path tmp;
+  try {
+    if (fs::exists(out) && !fs::is_directory(out)) throw std::runtime_error("--out '" + out_dir + "' is a file");
+    if (fs::exists(out) && !fs::is_empty(out) && !force) {
+      throw std::runtime_error("--out '" + out_dir + "' is not empty (use --force to replace it)");
+    }
+    // 1. Everything that can fail on bad input, before any output.
+    const YAML::Node vehicle = loadYamlFile(vehicle_path);
+    const camera::CameraModel camera = camera::CameraModel::fromYaml(vehicle["camera"]);
+    std::optional<sim::LidarScannerOptions> lidar;
+    if (!no_lidar) lidar = sim::LidarScannerOptions::fromYaml(vehicle["lidar"]);
+    sim::WorldOptions world_options = sim::WorldOptions::fromYaml(loadYamlFile(world_path));
+    world_options.seed = seed;
+    if (flat) world_options.flat = true;
+
+    const osm::OsmData osm_data = osm::readOsm(osm_path);
+    const skeleton::Skeleton sk = skeleton::Skeleton::build(osm_data);
+    const auto world = sim::buildWorld(sk, world_options);
+    const YAML::Node drive_config = loadYamlFile(drive_path);
+    sim::DriveOptions drive = sim::DriveOptions::fromYaml(drive_config["drive"]);
+    drive.seed = seed;
+    drive.duration_s = duration;
+    drive.route_nodes = parseRoute(route_text);
+    const sim::LanePlan plan = sim::planDrive(sk, world->truth(), drive);
+    const sim::Trajectory trajectory(world->truth(), *world, plan, drive);
+    if (!quiet) {
+      std::printf("lanemap-sim: %zu atomic roads, %zu lanelets; route of %zu roads, %.0f m, %.1f s\n",
+                  sk.roads().size(), world->truth().lanelets.size(), plan.roads.size(),
+                  trajectory.length(), trajectory.duration());
+    }
+
+    // 2. Write into a temporary sibling folder, then rename it into place.
+    const fs::path parent = fs::absolute(out).parent_path();
+    fs::create_directories(parent);
+    tmp = parent / (out.filename().string() + ".partial." + std::to_string(getpid()));
+    fs::remove_all(tmp);
+    fs::create_directories(tmp);
+
+    io::writeLanelet2(world->truth(), (tmp / "groundtruth.osm").string());
+    io::RoadOsmOptions road_options;
+    road_options.keep_lane_tags = keep_lane_tags;
+    io::writeRoadOsm(osm_data, (tmp / "roads.osm").string(), road_options);
+    io::MapPngOptions png;
+    png.background_polylines = io::skeletonPolylines(sk);
+    if (osm_data.bounds.valid()) {  // the extract's area, not the far ends of ways leaving it
+      const auto& b = osm_data.bounds;
+      png.bbox = Eigen::AlignedBox2d(sk.frame().toEnu(b.min_lat, b.min_lon).head<2>(),
+                                     sk.frame().toEnu(b.max_lat, b.max_lon).head<2>());
+    }
+    io::writeMapPng(world->truth(), (tmp / "groundtruth.png").string(), png);
+
+    sim::SimulatorOptions sim_options;
+    sim_options.seed = seed;
+    sim_options.camera_rate_hz = camera_hz;
+    sim_options.pose_rate_hz = pose_hz;
+    sim_options.lidar = !no_lidar;
+    if (vehicle["camera"]["jpeg_quality"]) sim_options.jpeg_quality = vehicle["camera"]["jpeg_quality"].as<int>();
+    sim_options.pose_noise = sim::PoseNoiseOptions::fromYaml(drive_config["pose_noise"]);
+    sim::RenderOptions render;
+    // Lines between the two directions of a road are painted yellow (US style).
+    render.opposite_directions = [w = world.get()](int64_t a, int64_t b) {
+      const map::Lanelet* la = w->lanelet(a);
+      const map::Lanelet* lb = w->lanelet(b);
+      return la && lb && la->from_node == lb->to_node && la->to_node == lb->from_node;
+    };
+    sim::Simulator simulator(*world, trajectory, sk.frame(), camera, render, lidar, sim_options);
+    sim::SimulatorCounts counts;
+    {
+      LogSink sink((tmp / "drive.lcmlog").string());
+      counts = simulator.run(sink, [quiet](double f) {
+        if (!quiet) std::fprintf(stderr, "\rlanemap-sim: rendering %3.0f %%", 100.0 * f);
+      });
+      if (!quiet) std::fprintf(stderr, "\n");
+    }
+
+    struct DrivenRoad {
+      int64_t road_id;
+      int64_t entered_utime;
+      std::optional<int64_t> left_utime;
+    };
+    std::vector<DrivenRoad> driven;
+    {
+      std::ofstream csv(tmp / "trajectory.csv");
+      csv << "t_s,utime,east_m,north_m,up_m,yaw_rad,speed_mps,lanelet,road_id\n";
+      char line[256];
+      for (double t = 0.0; t <= trajectory.duration() + 1e-9; t += 0.1) {
+        const sim::VehicleState st = trajectory.at(t);
+        const Eigen::Vector3d p = st.vehicle_to_enu.translation();
+        const Eigen::Vector3d x = st.vehicle_to_enu.linear().col(0);
+        std::snprintf(line, sizeof(line), "%.3f,%lld,%.4f,%.4f,%.4f,%.6f,%.3f,%lld,%lld\n", t,
+                      static_cast<long long>(sim_options.start_utime + std::llround(t * 1e6)), p.x(), p.y(),
+                      p.z(), std::atan2(x.y(), x.x()), st.speed, static_cast<long long>(st.lanelet),
+                      static_cast<long long>(st.road_id));
+        csv << line;
+        // The roads truly driven: a road starts at its first sample, ends at the first sample
+        // that is no longer on it (inside the intersection ROI's lanelets, or the next road).
+        const int64_t utime = sim_options.start_utime + std::llround(t * 1e6);
+        if (!driven.empty() && !driven.back().left_utime && st.road_id != driven.back().road_id) {
+          driven.back().left_utime = utime;
+        }
+        if (st.road_id >= 0 && (driven.empty() || driven.back().left_utime)) driven.push_back({st.road_id, utime, {}});
+      }
+    }
+
+    nlohmann::json scenario;
+    scenario["osm"] = fs::absolute(osm_path).string();
+    scenario["seed"] = seed;
+    scenario["start_utime"] = sim_options.start_utime;
+    scenario["duration_s"] = trajectory.duration();
+    scenario["length_m"] = trajectory.length();
+    scenario["options"] = {{"route", route_text}, {"camera_hz", camera_hz}, {"pose_hz", pose_hz},
+                           {"lidar", !no_lidar}, {"flat", world_options.flat},
+                           {"keep_lane_tags", keep_lane_tags}, {"vehicle", fs::absolute(vehicle_path).string()}};
+    scenario["origin"] = {{"lat", sk.frame().origin().lat}, {"lon", sk.frame().origin().lon},
+                          {"alt", sk.frame().origin().alt}};
+    // route: the atomic roads the car truly drove, in order, with when it entered each and when it
+    // reached the road's end intersection (null if the drive ended on the road); planned_route:
+    // every road the plan held (the drive may stop before its end).
+    nlohmann::json route = nlohmann::json::array();
+    for (const auto& d : driven) {
+      const auto* road = sk.road(d.road_id);
+      route.push_back({{"road_id", d.road_id}, {"from", road->from}, {"to", road->to}, {"way_id", road->way_id},
+                       {"length_m", road->length}, {"entered_utime", d.entered_utime},
+                       {"left_utime", d.left_utime ? nlohmann::json(*d.left_utime) : nlohmann::json(nullptr)}});
+    }
+    scenario["route"] = route;
+    scenario["planned_route"] = plan.roads;
+    scenario["counts"] = {{"poses", counts.poses}, {"camera_frames", counts.camera_frames},
+                          {"lidar_sweeps", counts.lidar_sweeps}, {"lidar_packets", counts.lidar_packets}};
+    {
+      std::ofstream js(tmp / "scenario.json");
+      js << scenario.dump(2) << "\n";
+    }
+
+    if (fs::exists(out)) fs::remove_all(out);
+    fs::rename(tmp, out);
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    if (!quiet) {
+      std::printf("lanemap-sim: wrote %s: %lld poses, %lld camera frames, %lld LIDAR sweeps in %.1f s\n",
+                  out_dir.c_str(), static_cast<long long>(counts.poses),
+                  static_cast<long long>(counts.camera_frames), static_cast<long long>(counts.lidar_sweeps), secs);
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    if (!tmp.empty()) fs::remove_all(tmp, ec);
+    std::fprintf(stderr, "lanemap-sim: error: %s\n", e.what());
+    return 2;
+  }
+}

@@ -6,7 +6,7 @@ PACKAGES=(
   build-essential cmake pkg-config git
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev default-jdk-headless
   libeigen3-dev libopencv-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev
-  libgeographiclib-dev libv4l-dev libosmium2-dev libprotozero-dev libbz2-dev zlib1g-dev libexpat1-dev
+  libgeographiclib-dev libpcl-dev libv4l-dev libosmium2-dev libprotozero-dev libbz2-dev zlib1g-dev libexpat1-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev
   osmium-tool iproute2 util-linux
 )

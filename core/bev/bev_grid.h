@@ -1,0 +1,107 @@
+// The bird's-eye-view evidence grid of one atomic road (METHOD.md section 3): class evidence
+// accumulated over many projected camera frames, in the map's ENU metres.
+//
+// Layers are absolute, not ego-relative. The segmentation's five lane classes (ego, left, right,
+// left-left, right-right) name lanes relative to where the car was when the frame was taken, so
+// they change meaning at every lane change. What stays true across frames is (a) that a pixel is
+// drivable lane and (b) that two neighbouring pixels of *different* lane classes lie on a
+// separation between two lanes, painted or not. The projector turns lane classes into kDrivable
+// and lane-class transitions into kLaneSeparation; marking classes map to their own layer.
+// Every projected pixel also counts in kObserved, so fraction() is "how often this cell was seen
+// as that class when it was seen at all".
+//
+// Sparse: square tiles of tile_cells x tile_cells cells are allocated on first write, so a road's
+// grid costs its corridor's area, not its bounding box's. Counts are uint16, saturating.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace lanemap::bev {
+
+enum class Layer : uint8_t {
+  kObserved = 0,    // the cell was seen (any class, background included)
+  kDrivable,        // any of the five lane classes
+  kLaneSeparation,  // between two different lane classes (lane boundary, painted or not)
+  kDashedLine,
+  kSolidLine,
+  kCrosswalk,
+  kCurb,
+  kStopLine,
+  kCount
+};
+inline constexpr int kNumLayers = static_cast<int>(Layer::kCount);
+const char* toString(Layer layer);
+
+class BevError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct BevGridOptions {
+  double resolution_m = 0.1;  // cell side
+  int tile_cells = 128;       // tile side in cells (12.8 m at 0.1 m)
+};
+
+class BevGrid {
+ public:
+  using Cell = Eigen::Vector2i;  // (column east, row north): cell (i, j) covers
+                                 // [i*res, (i+1)*res) x [j*res, (j+1)*res) in ENU metres
+
+  explicit BevGrid(BevGridOptions options = {});
+
+  const BevGridOptions& options() const { return options_; }
+  double resolution() const { return options_.resolution_m; }
+
+  Cell cellOf(const Eigen::Vector2d& enu) const;
+  Eigen::Vector2d cellCentre(const Cell& cell) const;
+
+  // Adds `n` observations of `layer` to a cell (allocating its tile), saturating at 65535.
+  void add(const Cell& cell, Layer layer, uint16_t n = 1);
+  // Count of a layer in a cell; 0 where nothing was written.
+  uint16_t count(const Cell& cell, Layer layer) const;
+  uint16_t count(const Eigen::Vector2d& enu, Layer layer) const { return count(cellOf(enu), layer); }
+  // count(layer) / count(kObserved); 0 for a cell never observed.
+  float fraction(const Cell& cell, Layer layer) const;
+  float fraction(const Eigen::Vector2d& enu, Layer layer) const { return fraction(cellOf(enu), layer); }
+  bool observed(const Cell& cell) const { return count(cell, Layer::kObserved) > 0; }
+
+  // Frames accumulated (kept by the caller through addFrame()).
+  int frames() const { return frames_; }
+  void addFrame() { ++frames_; }
+
+  // Cells spanned by the allocated tiles (empty box when none).
+  Eigen::AlignedBox2i cellBounds() const;
+  size_t tileCount() const { return tiles_.size(); }
+  size_t memoryBytes() const;
+
+  // Visits every allocated tile: origin cell (its min corner) and a pointer to its counts,
+  // layer-major: counts[layer * tile_cells^2 + row * tile_cells + col].
+  template <typename F>
+  void forEachTile(F&& f) const {
+    for (const auto& [key, tile] : tiles_) f(tileOrigin(key), tile.data());
+  }
+
+  // Binary file (little-endian): magic "LMBEV001", resolution, tile size, frames, tiles. Written
+  // atomically (io::writeFileAtomically). load() throws BevError on a bad or truncated file.
+  void save(const std::string& path) const;
+  static BevGrid load(const std::string& path);
+
+ private:
+  using Key = int64_t;
+  static Key key(int tx, int ty) { return (static_cast<int64_t>(tx) << 32) ^ static_cast<uint32_t>(ty); }
+  Cell tileOrigin(Key k) const;
+  BevGridOptions options_;
+  int frames_ = 0;
+  std::unordered_map<Key, std::vector<uint16_t>> tiles_;
+};
+
+}  // namespace lanemap::bev

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# make bench: every benchmark, figures printed (no thresholds). Usage: tools/bench/run_all.sh BUILD_DIR
+set -euo pipefail
+build=${1:-build}
+bin=$build/bin
+out=$(mktemp -d "${TMPDIR:-/tmp}/lanemap-bench.XXXXXX")
+trap 'rm -rf "$out"' EXIT
+
+echo "== machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GiB", $2/1048576}' /proc/meminfo)"
+
+echo "== road tracker and skeleton queries"
+"$bin/lanemap-bench-road-tracker"
+
+# Issue 2's target: a 2-minute drive renders in a few minutes on 2 cores (camera 10 Hz + VLP-16).
+echo "== lanemap-sim: 120 s drive over West Oakland, camera 10 Hz, LIDAR, seed 1"
+TIMEFORMAT="   wall %R s, user %U s, sys %S s"
+if [ -x /usr/bin/time ]; then
+  time /usr/bin/time -f "   peak RSS %M KiB" "$bin/lanemap-sim" -q --osm data/osm/west-oakland.osm --out "$out/drive" --duration 120 --seed 1
+else
+  time "$bin/lanemap-sim" -q --osm data/osm/west-oakland.osm --out "$out/drive" --duration 120 --seed 1
+fi
+du -sh "$out/drive"/* | sed 's/^/   /'

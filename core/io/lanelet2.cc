@@ -729,7 +729,20 @@ class Lanelet2Reader {
       if (rl.centre_way) add(*rl.centre_way);
       if (rl.stop_way) add(*rl.stop_way);
     }
+    for (const auto& [way_id, w] : raw_.ways) {
+      if (isStandaloneLine(w)) add(way_id);
+    }
     return used;
+  }
+
+  // A typed marking or border way whose nodes are all there: kept as a LineString even when no
+  // lanelet uses it (a curb behind a parking lane, a lone stop line), so nothing typed is lost.
+  bool isStandaloneLine(const RawWay& w) const {
+    if (w.refs.size() < 2 || (w.type != "virtual" && lineTypeOf(w) == LineType::kVirtual)) return false;
+    return std::all_of(w.refs.begin(), w.refs.end(), [&](int64_t n) {
+      const auto it = raw_.nodes.find(n);
+      return it != raw_.nodes.end() && it->second.located;
+    });
   }
 
   // Positions from lat/lon(/ele); from local_x/local_y when every used node has them and they
@@ -835,6 +848,14 @@ class Lanelet2Reader {
       }
     }
     for (int64_t w : stop_ways) addLine(w, w, false);
+    // OSM ids are per element type: a way may share its number with a lanelet relation. A
+    // standalone line that would collide gets a fresh id (ids of the map stay distinct).
+    std::vector<int64_t> standalone;
+    for (const auto& [way_id, w] : raw_.ways) {
+      if (!uses.count(way_id) && !stop_ways.count(way_id) && isStandaloneLine(w)) standalone.push_back(way_id);
+    }
+    std::sort(standalone.begin(), standalone.end());  // deterministic fresh ids
+    for (int64_t way_id : standalone) addLine(raw_.relations.count(way_id) ? next_id++ : way_id, way_id, false);
     std::sort(out_.map.lines.begin(), out_.map.lines.end(),
               [](const auto& a, const auto& b) { return a.id < b.id; });
   }

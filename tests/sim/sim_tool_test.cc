@@ -261,6 +261,25 @@ TEST_F(SimDrive, GroundTruthMapReadsBackWithEveryLanelet) {
   const auto& truth = g_drive->world->truth();
   const auto back = io::readLanelet2(g_drive->out() + "/groundtruth.osm", truth.origin_lat, truth.origin_lon);
   EXPECT_EQ(back.lanelets.size(), truth.lanelets.size());
+  // The file's geometry is the truth simplified by 1 cm: every truth point of every line lies
+  // within 1 cm (+ the 1e-7 degree coordinate rounding) of the line read back.
+  size_t truth_points = 0, file_points = 0;
+  for (const auto& t : truth.lines) {
+    const auto* b = back.line(t.id);
+    ASSERT_NE(b, nullptr) << "line " << t.id;
+    truth_points += t.points.size();
+    file_points += b->points.size();
+    for (const auto& p : t.points) {
+      double best = 1e300;
+      for (size_t i = 0; i + 1 < b->points.size(); ++i) {
+        const Eigen::Vector3d ab = b->points[i + 1] - b->points[i];
+        const double u = ab.squaredNorm() > 0 ? std::clamp((p - b->points[i]).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+        best = std::min(best, (p - (b->points[i] + u * ab)).head<2>().norm());
+      }
+      ASSERT_LT(best, 0.012) << "line " << t.id;
+    }
+  }
+  EXPECT_LT(file_points * 2, truth_points) << "simplification should at least halve the nodes";
   size_t road = 0;
   for (const auto& l : back.lanelets) road += l.kind == map::LaneletKind::kRoad;
   EXPECT_GT(road, 0u);

@@ -21,7 +21,6 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <random>
@@ -496,33 +495,23 @@ TEST(Skeleton, BadInputThrows) {
   EXPECT_THROW(c.build(-1.0), OsmError);
 }
 
-TEST(Skeleton, NearestRoadsTiming) {
+TEST(Skeleton, NearestRoadsFindsEveryNoisyQueryOnMonaco) {
+  // Speed is measured by tools/bench (lanemap-bench-road-tracker), not asserted here.
   const Skeleton& s = monacoSkeleton();
-  // Query points: on and near the roads (where a car is), deterministic.
+  // Query points: near the roads (where a car is), deterministic.
   std::mt19937 rng(7);
   std::normal_distribution<double> noise(0.0, 3.0);
-  std::vector<std::pair<Vector2d, double>> queries;
-  for (int i = 0; i < 100000; ++i) {
+  size_t found = 0, right_road = 0;
+  const int n = 20000;
+  for (int i = 0; i < n; ++i) {
     const AtomicRoad& r = s.roads()[rng() % s.roads().size()];
     const double sq = std::uniform_real_distribution<double>(0, r.length)(rng);
     const Vector2d t = s.tangentAt(r, sq);
-    queries.emplace_back(s.pointAt(r, sq) + Vector2d(noise(rng), noise(rng)), std::atan2(t.y(), t.x()));
+    const Vector2d p = s.pointAt(r, sq) + Vector2d(noise(rng), noise(rng));
+    const auto matches = s.nearestRoads(p, 15.0, std::atan2(t.y(), t.x()));
+    found += !matches.empty();
+    for (const auto& m : matches) right_road += m.road_id == r.id;
   }
-  size_t found = 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  for (const auto& [p, h] : queries) found += !s.nearestRoads(p, 15.0, h).empty();
-  const double us =
-      std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / queries.size();
-  const auto t1 = std::chrono::steady_clock::now();
-  size_t in_roi = 0;
-  for (const auto& [p, h] : queries) in_roi += s.intersectionContaining(p) != nullptr;
-  const double us_roi =
-      std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t1).count() / queries.size();
-  std::printf("[ timing   ] monaco (%zu roads): nearestRoads(15 m, heading) %.2f us/query, "
-              "intersectionContaining %.2f us/query, %zu of 100000 in an ROI\n",
-              s.roads().size(), us, us_roi, in_roi);
-  EXPECT_EQ(found, queries.size());  // 3 m noise is always within 15 m of the road
-  // At 100 Hz a query may cost far less than 10 ms; 200 us leaves room for a slow shared CI core.
-  EXPECT_LT(us, 200.0);
-  EXPECT_LT(us_roi, 200.0);
+  EXPECT_EQ(found, static_cast<size_t>(n));  // 3 m noise is always within 15 m of the road
+  EXPECT_EQ(right_road, static_cast<size_t>(n)) << "the sampled road is among the matches";
 }

@@ -47,6 +47,11 @@ void bench(const std::string& path) {
   const double t_q = secondsSince(t0);
   std::printf("  nearestRoads(8 m, heading): %.2f us per query (%zu queries, %.1f matches each)\n",
               1e6 * t_q / queries.size(), queries.size(), double(found) / queries.size());
+  t0 = Clock::now();
+  size_t in_roi = 0;
+  for (const auto& q : queries) in_roi += sk.intersectionContaining(q.first) != nullptr;
+  std::printf("  intersectionContaining: %.2f us per query (%zu of %zu in an ROI)\n",
+              1e6 * secondsSince(t0) / queries.size(), in_roi, queries.size());
 
   // The tracker on 100 Hz poses driven along every road in turn (10 m/s, 1.5 m noise).
   tracking::RoadTracker tracker(sk);

@@ -20,3 +20,6 @@ else
   time "$bin/lanemap-sim" -q --osm data/osm/west-oakland.osm --out "$out/drive" --duration 120 --seed 1
 fi
 du -sh "$out/drive"/* | sed 's/^/   /'
+
+echo "== lane exploration (particle filter per 100 m of road, N = 500 and 2000)"
+"$bin/lanemap-bench-lanes"

@@ -1,0 +1,679 @@
+#include "core/lanes/explorer.h"
+
+#include "core/lanes/dbscan.h"
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <unordered_map>
+
+namespace lanemap::lanes {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// Cell classes of the straightened raster; >= kBlocked kills a particle.
+enum Code : uint8_t { kUnobserved = 0, kDrivable, kBlocked, kSeparation, kDashed, kSolid, kCurb, kOutside };
+
+int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// Direct tile access to a BevGrid (one hash lookup per tile change, not per layer and cell).
+class BevSampler {
+ public:
+  explicit BevSampler(const bev::BevGrid& g) : t_(g.options().tile_cells), res_(g.resolution()) {
+    g.forEachTile([&](const bev::BevGrid::Cell& origin, const uint16_t* data) {
+      tiles_[key(floorDiv(origin.x(), t_), floorDiv(origin.y(), t_))] = data;
+    });
+  }
+  // Counts of every layer at an ENU point; nullptr-free: zeros where nothing was written.
+  const uint16_t* at(const Eigen::Vector2d& p, size_t* idx) {
+    const int cx = static_cast<int>(std::floor(p.x() / res_)), cy = static_cast<int>(std::floor(p.y() / res_));
+    const int tx = floorDiv(cx, t_), ty = floorDiv(cy, t_);
+    const int64_t k = key(tx, ty);
+    if (k != last_key_) {
+      last_key_ = k;
+      auto it = tiles_.find(k);
+      last_ = it == tiles_.end() ? nullptr : it->second;
+    }
+    *idx = static_cast<size_t>(cy - ty * t_) * t_ + (cx - tx * t_);
+    return last_;
+  }
+  size_t layerStride() const { return static_cast<size_t>(t_) * t_; }
+
+ private:
+  static int64_t key(int tx, int ty) { return (static_cast<int64_t>(tx) << 32) ^ static_cast<uint32_t>(ty); }
+  int t_;
+  double res_;
+  std::unordered_map<int64_t, const uint16_t*> tiles_;
+  int64_t last_key_ = INT64_MIN;
+  const uint16_t* last_ = nullptr;
+};
+
+// The road's evidence in its Frenet frame: rows along s, columns along d.
+struct Raster {
+  double sa = 0, res = 0.1, d0 = 0;  // row i at s = sa + (i + 0.5) res; column j at d = d0 + (j + 0.5) res
+  int ns = 0, nd = 0;
+  std::vector<uint8_t> code;
+  std::vector<int32_t> dead_sat, good_sat;  // summed-area tables, (ns + 1) x (nd + 1)
+
+  uint8_t at(int i, int j) const { return code[static_cast<size_t>(i) * nd + j]; }
+  int row(double s) const { return static_cast<int>(std::floor((s - sa) / res)); }
+  int col(double d) const { return static_cast<int>(std::floor((d - d0) / res)); }
+  double sOf(int i) const { return sa + (i + 0.5) * res; }
+  double dOf(int j) const { return d0 + (j + 0.5) * res; }
+
+  static int32_t box(const std::vector<int32_t>& sat, int nd1, int i0, int i1, int j0, int j1) {
+    // inclusive cell ranges, already clamped
+    return sat[static_cast<size_t>(i1 + 1) * nd1 + j1 + 1] - sat[static_cast<size_t>(i0) * nd1 + j1 + 1] -
+           sat[static_cast<size_t>(i1 + 1) * nd1 + j0] + sat[static_cast<size_t>(i0) * nd1 + j0];
+  }
+  // Deadly cells in [s0, s1] x [d0, d1]; a box leaving the corridor sideways counts as deadly,
+  // rows beyond the raster's ends as free.
+  int deadly(double s0, double s1, double dlo, double dhi) const {
+    int j0 = col(dlo), j1 = col(dhi);
+    if (j0 < 0 || j1 >= nd) return 1;
+    int i0 = std::max(0, row(s0)), i1 = std::min(ns - 1, row(s1));
+    if (i1 < i0) return 0;
+    return box(dead_sat, nd + 1, i0, i1, j0, j1);
+  }
+  // Fraction of cells observed drivable in the box (0 outside).
+  double goodFraction(double s0, double s1, double dlo, double dhi) const {
+    const int j0 = std::max(0, col(dlo)), j1 = std::min(nd - 1, col(dhi));
+    const int i0 = std::max(0, row(s0)), i1 = std::min(ns - 1, row(s1));
+    if (i1 < i0 || j1 < j0) return 0.0;
+    return static_cast<double>(box(good_sat, nd + 1, i0, i1, j0, j1)) / ((i1 - i0 + 1) * (j1 - j0 + 1));
+  }
+};
+
+Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const RoadGeometry& road, const ExplorerOptions& o) {
+  Raster r;
+  r.res = grid.resolution();
+  r.sa = std::max(0.0, road.s_begin - 3.0);
+  const double sb = std::min(frame.length(), road.s_end + 3.0);
+  r.ns = std::max(1, static_cast<int>(std::ceil((sb - r.sa) / r.res)));
+  r.d0 = -o.corridor_half_width_m;
+  r.nd = static_cast<int>(std::ceil(2 * o.corridor_half_width_m / r.res));
+  r.code.assign(static_cast<size_t>(r.ns) * r.nd, kUnobserved);
+  BevSampler sampler(grid);
+  const size_t L = sampler.layerStride();
+  auto layer = [&](const uint16_t* t, size_t idx, bev::Layer l) { return t[static_cast<size_t>(l) * L + idx]; };
+  for (int i = 0; i < r.ns; ++i) {
+    const double s = r.sOf(i);
+    const Eigen::Vector2d p = frame.point(s), n = frame.normal(s);
+    for (int j = 0; j < r.nd; ++j) {
+      size_t idx;
+      const uint16_t* t = sampler.at(p + r.dOf(j) * n, &idx);
+      if (!t) continue;
+      const double obs = layer(t, idx, bev::Layer::kObserved);
+      if (obs < o.min_observations) continue;
+      auto f = [&](bev::Layer l) { return layer(t, idx, l) / obs; };
+      uint8_t c;
+      if (f(bev::Layer::kCurb) >= o.marking_fraction) c = kCurb;
+      else if (f(bev::Layer::kSolidLine) >= o.marking_fraction) c = kSolid;
+      else if (f(bev::Layer::kDashedLine) >= o.marking_fraction) c = kDashed;
+      else if (f(bev::Layer::kLaneSeparation) >= o.separation_fraction) c = kSeparation;
+      else if (f(bev::Layer::kDrivable) + f(bev::Layer::kCrosswalk) + f(bev::Layer::kStopLine) >= o.drivable_fraction) c = kDrivable;
+      else c = kBlocked;
+      r.code[static_cast<size_t>(i) * r.nd + j] = c;
+    }
+  }
+  // Direction divider of a two-way road: per divider_bin_m of s, the solid line nearest d = 0
+  // within divider_search_m; bins without one are interpolated, a road without any uses d = 0.
+  if (road.two_way) {
+    const int bin_rows = std::max(1, static_cast<int>(std::round(o.divider_bin_m / r.res)));
+    const int nb = (r.ns + bin_rows - 1) / bin_rows;
+    std::vector<double> div(nb, NAN);
+    const int jlo = std::max(0, r.col(-o.divider_search_m)), jhi = std::min(r.nd - 1, r.col(o.divider_search_m));
+    for (int b = 0; b < nb; ++b) {
+      const int i0 = b * bin_rows, i1 = std::min(r.ns, i0 + bin_rows);
+      double best = INFINITY;
+      for (int j = jlo; j <= jhi; ++j) {
+        int solid = 0;
+        for (int i = i0; i < i1; ++i) solid += r.at(i, j) == kSolid;
+        if (solid >= 0.3 * (i1 - i0) && std::abs(r.dOf(j)) < std::abs(best)) best = r.dOf(j);
+      }
+      if (std::isfinite(best)) {
+        // Centre of the solid run around `best` (a double line is two runs 0.2 m apart: both).
+        div[b] = best;
+      }
+    }
+    std::vector<int> known;
+    for (int b = 0; b < nb; ++b) if (std::isfinite(div[b])) known.push_back(b);
+    for (int b = 0; b < nb; ++b) {
+      if (std::isfinite(div[b])) continue;
+      if (known.empty()) { div[b] = 0.0; continue; }
+      auto it = std::lower_bound(known.begin(), known.end(), b);
+      if (it == known.begin()) div[b] = div[*it];
+      else if (it == known.end()) div[b] = div[known.back()];
+      else {
+        const int a = *(it - 1), c = *it;
+        div[b] = div[a] + (div[c] - div[a]) * (b - a) / double(c - a);
+      }
+    }
+    for (int i = 0; i < r.ns; ++i) {
+      const double dv = div[i / bin_rows];
+      for (int j = 0; j < r.nd; ++j) {
+        const double d = r.dOf(j);
+        const bool out = o.right_hand_traffic ? d > dv + 0.15 : d < dv - 0.15;
+        if (out) r.code[static_cast<size_t>(i) * r.nd + j] = kOutside;
+      }
+    }
+  }
+  // Our carriageway: per bin along s, walk out from the road's centre line (or the nearest drivable
+  // column to it) to the first wall (blocked or curb in most rows of the bin, at least
+  // carriageway_wall_m wide): a median, a sidewalk, a parking strip. Beyond it lie other roads
+  // (the other carriageway of a dual road, a parallel street) that are not this road's lanes. A
+  // parked car fills few rows of a bin and is no wall.
+  {
+    const int bin_rows = std::max(1, static_cast<int>(std::round(o.divider_bin_m / r.res)));
+    const int wall_cols = std::max(1, static_cast<int>(std::round(o.carriageway_wall_m / r.res)));
+    for (int i0 = 0; i0 < r.ns; i0 += bin_rows) {
+      const int i1 = std::min(r.ns, i0 + bin_rows);
+      std::vector<float> wall(r.nd), good(r.nd);
+      for (int j = 0; j < r.nd; ++j) {
+        int w = 0, g = 0;
+        for (int i = i0; i < i1; ++i) {
+          const uint8_t c = r.at(i, j);
+          w += c == kBlocked || c == kCurb;
+          g += c == kDrivable;
+        }
+        wall[j] = static_cast<float>(w) / (i1 - i0);
+        good[j] = static_cast<float>(g) / (i1 - i0);
+      }
+      int start = -1;
+      for (int k = 0; k < r.nd && start < 0; ++k) {
+        for (int j : {r.col(0.0) - k, r.col(0.0) + k}) {
+          if (j >= 0 && j < r.nd && good[j] > 0.3f) {
+            start = j;
+            break;
+          }
+        }
+      }
+      if (start < 0) continue;
+      for (int dir : {1, -1}) {
+        int run = 0;
+        for (int j = start; j >= 0 && j < r.nd; j += dir) {
+          run = wall[j] >= 0.8f ? run + 1 : 0;
+          if (run < wall_cols) continue;
+          const int first_out = j - dir * (wall_cols - 1);
+          for (int i = i0; i < i1; ++i) {
+            for (int jj = first_out; jj >= 0 && jj < r.nd; jj += dir) {
+              uint8_t& c = r.code[static_cast<size_t>(i) * r.nd + jj];
+              if (c != kCurb) c = kOutside;  // a curb stays a curb for the boundary type
+            }
+          }
+          break;
+        }
+      }
+    }
+  }
+  const int nd1 = r.nd + 1;
+  r.dead_sat.assign(static_cast<size_t>(r.ns + 1) * nd1, 0);
+  r.good_sat.assign(static_cast<size_t>(r.ns + 1) * nd1, 0);
+  for (int i = 0; i < r.ns; ++i) {
+    int32_t rd = 0, rg = 0;
+    for (int j = 0; j < r.nd; ++j) {
+      const uint8_t c = r.at(i, j);
+      rd += c >= kBlocked;
+      rg += c == kDrivable;
+      r.dead_sat[static_cast<size_t>(i + 1) * nd1 + j + 1] = r.dead_sat[static_cast<size_t>(i) * nd1 + j + 1] + rd;
+      r.good_sat[static_cast<size_t>(i + 1) * nd1 + j + 1] = r.good_sat[static_cast<size_t>(i) * nd1 + j + 1] + rg;
+    }
+  }
+  return r;
+}
+
+// Footprint collision: the rectangle is cut into slices along its length, each tested with the
+// axis-aligned box around it (exact for a heading along the road, ~0.1 m generous at 0.3 rad).
+struct Footprint {
+  double L, W;
+  int slices;
+  bool collides(const Raster& r, double s, double d, double phi) const {
+    const double c = std::cos(phi), sn = std::sin(phi), ac = std::abs(c), as = std::abs(sn);
+    const double hl = L / slices / 2;
+    const double hs = hl * ac + W / 2 * as, hd = hl * as + W / 2 * ac;
+    for (int k = 0; k < slices; ++k) {
+      const double u = -L / 2 + (2 * k + 1) * hl;
+      const double cs = s + u * c, cd = d + u * sn;
+      if (r.deadly(cs - hs, cs + hs, cd - hd, cd + hd) > 0) return true;
+    }
+    return false;
+  }
+};
+
+struct Cluster {
+  double dmin, dmax, dmean, smean;
+  std::vector<int> members;  // indices into the step's survivor list
+};
+
+struct Track {
+  int id = 0;
+  bool active = true;
+  double d = 0.0;             // last offset
+  double first_s = 0.0, last_seen_s = 0.0, last_alive_s = 0.0;
+  bool initial = false;       // started with the start strip
+  int parent = -1, merge_into = -1;
+  std::vector<double> sum, cnt;  // per s-bin
+};
+
+}  // namespace
+
+RoadGeometry RoadGeometry::fromSkeleton(const skeleton::AtomicRoad& road) {
+  RoadGeometry g;
+  g.road_id = road.id;
+  g.from_node = road.from;
+  g.to_node = road.to;
+  g.polyline = road.polyline;
+  g.s_begin = road.s_begin;
+  g.s_end = road.s_end;
+  g.two_way = road.reverse_id >= 0;
+  return g;
+}
+
+int ExplorationResult::laneCountAt(double s) const {
+  int n = 0;
+  for (const auto& l : lanes) n += s >= l.s_begin && s <= l.s_end;
+  return n;
+}
+
+ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road, const ExplorerOptions& o,
+                              const std::optional<EgoPose>& ego, int history_stride) {
+  o.validate();
+  if (road.polyline.size() < 2) throw LanesError("road " + std::to_string(road.road_id) + " has no polyline");
+  ExplorationResult res;
+  res.road_id = road.road_id;
+  res.from_node = road.from_node;
+  res.to_node = road.to_node;
+  auto frame = std::make_shared<FrenetFrame>(road.polyline, o.frame_spacing_m, o.frame_smoothing_m);
+  res.frame = frame;
+  const double s_stop = std::min(road.s_end, frame->length());
+  double s_start = std::clamp(road.s_begin, 0.0, frame->length());
+  if (ego) s_start = std::clamp(frame->toFrenet(ego->position).x(), s_start, s_stop);
+  if (!(s_stop - s_start > 1.0)) throw LanesError("road " + std::to_string(road.road_id) + " has no length to explore");
+
+  auto t0 = Clock::now();
+  const Raster R = buildRaster(grid, *frame, road, o);
+  res.stats.raster_s = since(t0);
+  t0 = Clock::now();
+
+  const int N = o.num_particles;
+  const Footprint fp{o.footprint_length_m, o.footprint_width_m,
+                     std::max(1, static_cast<int>(std::ceil(o.footprint_length_m / 0.5)))};
+  std::mt19937_64 rng(o.seed);
+  std::uniform_real_distribution<double> U01(0.0, 1.0);
+  Eigen::ArrayXd S = Eigen::ArrayXd::Constant(N, s_start), D = Eigen::ArrayXd::Zero(N), PHI = Eigen::ArrayXd::Zero(N);
+  Eigen::ArrayXd V(N), W(N);
+  std::vector<uint8_t> alive(N, 0);
+  const int nbins = static_cast<int>(std::ceil((R.sa + R.ns * R.res) / o.bin_m)) + 1;
+
+  // Free footprint-centre intervals across the road at s (heading along the road); with
+  // `need_good`, only intervals on observed drivable ground.
+  auto freeIntervals = [&](double s, bool need_good) {
+    std::vector<std::pair<double, double>> out;
+    const double hs = fp.L / 2, hd = fp.W / 2;
+    double run0 = NAN, prev = NAN;
+    for (int j = 0; j < R.nd; ++j) {
+      const double d = R.dOf(j);
+      bool ok = R.deadly(s - hs, s + hs, d - hd, d + hd) == 0;
+      if (ok && need_good) ok = R.goodFraction(s - hs, s + hs, d - hd, d + hd) >= o.birth_min_evidence;
+      if (ok) {
+        if (!std::isfinite(run0)) run0 = d;
+        prev = d;
+      }
+      if ((!ok || j == R.nd - 1) && std::isfinite(run0)) {
+        if (prev - run0 >= o.birth_min_free_m) out.push_back({run0, prev});
+        run0 = NAN;
+      }
+    }
+    return out;
+  };
+
+  // Start strip: across the free part of the road at the start (observed drivable preferred).
+  {
+    double s = s_start;
+    std::vector<std::pair<double, double>> iv;
+    for (; s < std::min(s_stop, s_start + 30.0); s += 1.0) {
+      iv = freeIntervals(s, true);
+      if (iv.empty()) iv = freeIntervals(s, false);
+      if (!iv.empty()) break;
+    }
+    if (ego && !iv.empty()) {
+      // The strip is perpendicular to the driving direction at the ego pose: that is our s_start.
+    }
+    double total = 0.0;
+    for (auto& [a, b] : iv) total += b - a + R.res;
+    for (int n = 0; n < N && total > 0; ++n) {
+      double u = (n + 0.5) / N * total;
+      for (auto& [a, b] : iv) {
+        const double w = b - a + R.res;
+        if (u <= w) {
+          D[n] = a - R.res / 2 + u;
+          break;
+        }
+        u -= w;
+      }
+      S[n] = s;
+      alive[n] = 1;
+    }
+    if (total > 0) ++res.stats.births;
+    s_start = s;
+  }
+
+  std::vector<Track> tracks;
+  double next_birth = s_start + o.birth_every_m;
+  std::vector<int> surv;
+  std::vector<Eigen::Vector2d> pts;
+  std::vector<double> lat;
+  std::vector<std::pair<double, int>> byD;
+  const double first_station = s_start;
+  double station = s_start;
+  const int max_steps = static_cast<int>(4.0 * (s_stop - s_start) / (o.v_min * o.dt_s)) + 100;
+
+  for (int step = 0; step < max_steps; ++step) {
+    // --- predict (Eq. 5), vectorised over the particles ---
+    for (int n = 0; n < N; ++n) {
+      V[n] = o.v_min + (o.v_max - o.v_min) * U01(rng);
+      W[n] = o.w_min + (o.w_max - o.w_min) * U01(rng);
+    }
+    const Eigen::ArrayXd moving = (S < s_stop).cast<double>();
+    const Eigen::ArrayXd heading = PHI + W;
+    S += moving * V * heading.cos() * o.dt_s;
+    D += moving * V * heading.sin() * o.dt_s;
+    PHI += moving * W * o.dt_s;
+    // --- evaluate: a footprint touching a boundary dies ---
+    surv.clear();
+    for (int n = 0; n < N; ++n) {
+      if (!alive[n]) continue;
+      ++res.stats.particle_steps;
+      const bool ok = std::abs(PHI[n]) <= o.max_heading_rad && !fp.collides(R, S[n], D[n], PHI[n]);
+      if (ok) surv.push_back(n);
+      else {
+        alive[n] = 0;
+        ++res.stats.deaths;
+      }
+    }
+    ++res.stats.steps;
+    if (!surv.empty()) {
+      std::vector<double> ss;
+      for (int n : surv) ss.push_back(S[n]);
+      std::nth_element(ss.begin(), ss.begin() + ss.size() / 2, ss.end());
+      station = std::max(station, ss[ss.size() / 2]);
+    } else {
+      station += 0.5 * (o.v_min + o.v_max) * o.dt_s;  // everything died: look further for births
+    }
+    if (history_stride > 0 && step % history_stride == 0) {
+      for (int n : surv) res.history.emplace_back(S[n], D[n]);
+    }
+
+    // --- clusters of this step (DBSCAN, the paper's eps) and lane tracking along s ---
+    // DBSCAN runs on the lateral offsets only: the particles of one lane spread along s by more
+    // than eps (speed noise, and those already waiting at I_j), which must not split a lane.
+    pts.clear();
+    lat.clear();
+    for (int n : surv) {
+      pts.emplace_back(S[n], D[n]);
+      lat.push_back(D[n]);
+    }
+    int K = 0;
+    const std::vector<int> label = dbscan1d(lat, o.dbscan_eps_m, o.dbscan_min_points, &K);
+    std::vector<Cluster> cl(K, Cluster{INFINITY, -INFINITY, 0.0, 0.0, {}});
+    for (size_t i = 0; i < pts.size(); ++i) {
+      if (label[i] < 0) continue;
+      Cluster& c = cl[label[i]];
+      c.dmin = std::min(c.dmin, pts[i].y());
+      c.dmax = std::max(c.dmax, pts[i].y());
+      c.dmean += pts[i].y();
+      c.smean += pts[i].x();
+      c.members.push_back(static_cast<int>(i));
+    }
+    for (auto& c : cl) {
+      c.dmean /= c.members.size();
+      c.smean /= c.members.size();
+    }
+    // Each active track picks the nearest cluster whose extent (+ tolerance) contains its d.
+    std::vector<int> primary(tracks.size(), -1);
+    std::vector<std::vector<int>> claim(K), touched(K);
+    for (size_t t = 0; t < tracks.size(); ++t) {
+      if (!tracks[t].active) continue;
+      double best = INFINITY;
+      for (int k = 0; k < K; ++k) {
+        if (tracks[t].d < cl[k].dmin - o.track_tolerance_m || tracks[t].d > cl[k].dmax + o.track_tolerance_m) continue;
+        touched[k].push_back(static_cast<int>(t));
+        const double e = std::abs(cl[k].dmean - tracks[t].d);
+        if (e < best) {
+          best = e;
+          primary[t] = k;
+        }
+      }
+      if (primary[t] >= 0) claim[primary[t]].push_back(static_cast<int>(t));
+    }
+    auto record = [&](Track& tr, const Cluster& c) {
+      for (int m : c.members) {
+        const int b = std::clamp(static_cast<int>(pts[m].x() / o.bin_m), 0, nbins - 1);
+        tr.sum[b] += pts[m].y();
+        tr.cnt[b] += 1;
+      }
+      tr.d = c.dmean;
+      tr.last_seen_s = tr.last_alive_s = c.smean;
+    };
+    for (int k = 0; k < K; ++k) {
+      auto& cs = claim[k];
+      // Two tracks closer than same_lane_m in one cluster are one lane: the younger ends there.
+      std::sort(cs.begin(), cs.end());
+      for (size_t a = 0; a < cs.size(); ++a) {
+        for (size_t b = a + 1; b < cs.size();) {
+          if (std::abs(tracks[cs[a]].d - tracks[cs[b]].d) < o.same_lane_m) {
+            tracks[cs[b]].active = false;
+            tracks[cs[b]].merge_into = cs[a];
+            cs.erase(cs.begin() + b);
+          } else {
+            ++b;
+          }
+        }
+      }
+      if (cs.size() == 1) {
+        record(tracks[cs[0]], cl[k]);
+      } else if (cs.size() >= 2) {
+        for (int t : cs) tracks[t].last_alive_s = cl[k].smean;  // distinct lanes in one wide cluster: coast
+      } else {
+        Track tr;
+        tr.id = static_cast<int>(tracks.size());
+        tr.first_s = cl[k].smean;
+        tr.initial = cl[k].smean < first_station + 5.0;
+        tr.sum.assign(nbins, 0.0);
+        tr.cnt.assign(nbins, 0.0);
+        if (!touched[k].empty()) {
+          tr.parent = touched[k].front();  // split off a lane whose cluster it was part of
+        } else if (!tr.initial) {
+          double best = o.split_neighbour_m;
+          for (const Track& other : tracks) {
+            if (other.active && std::abs(other.d - cl[k].dmean) < best) {
+              best = std::abs(other.d - cl[k].dmean);
+              tr.parent = other.id;
+            }
+          }
+        }
+        record(tr, cl[k]);
+        tracks.push_back(std::move(tr));
+      }
+    }
+    for (auto& tr : tracks) {
+      if (tr.active && station - tr.last_alive_s > o.lane_gap_max_m) {
+        tr.active = false;
+        double best = o.split_neighbour_m;
+        for (const Track& other : tracks) {
+          if (other.id != tr.id && other.active && std::abs(other.d - tr.d) < best) {
+            best = std::abs(other.d - tr.d);
+            tr.merge_into = other.id;
+          }
+        }
+      }
+    }
+
+    // --- resample: each dead particle becomes a copy of a survivor near it in d ---
+    if (!surv.empty()) {
+      byD.clear();
+      for (int n : surv) byD.emplace_back(D[n], n);
+      std::sort(byD.begin(), byD.end());
+      const int ns = static_cast<int>(byD.size());
+      for (int n = 0; n < N; ++n) {
+        if (alive[n]) continue;
+        int pos = static_cast<int>(std::lower_bound(byD.begin(), byD.end(), std::make_pair(D[n], -1)) - byD.begin());
+        pos = std::clamp(pos + static_cast<int>(std::floor(U01(rng) * 4.0)) - 2, 0, ns - 1);
+        const int p = byD[pos].second;
+        S[n] = S[p];
+        D[n] = D[p];
+        PHI[n] = PHI[p];
+        alive[n] = 1;
+      }
+    }
+
+    // --- births on observed drivable ground no particle covers ---
+    if (station >= next_birth && station < s_stop - o.footprint_length_m) {
+      next_birth = station + o.birth_every_m;
+      const auto iv = freeIntervals(station, true);
+      for (const auto& [a, b] : iv) {
+        bool covered = false;
+        for (int n = 0; n < N && !covered; ++n) {
+          covered = alive[n] && D[n] >= a - 0.3 && D[n] <= b + 0.3 && std::abs(S[n] - station) < 4.0;
+        }
+        if (covered) continue;
+        ++res.stats.births;
+        for (int q = 0; q < o.birth_particles; ++q) {
+          const int n = static_cast<int>(U01(rng) * N) % N;
+          S[n] = station + (U01(rng) - 0.5);
+          D[n] = a + (b - a) * (q + 0.5) / o.birth_particles;
+          PHI[n] = 0.0;
+          alive[n] = 1;
+        }
+      }
+    }
+    // Stop when the particles have reached I_j (all that live are at s_stop).
+    bool moving_left = false;
+    for (int n = 0; n < N && !moving_left; ++n) moving_left = alive[n] && S[n] < s_stop;
+    if (!moving_left && station >= s_stop - 1.0) break;
+    if (surv.empty() && station >= s_stop) break;
+  }
+  res.stats.filter_s = since(t0);
+  res.stats.tracks = static_cast<int>(tracks.size());
+  t0 = Clock::now();
+
+  // --- keep lanes long enough, fit their centre lines ---
+  std::vector<int> keep_index(tracks.size(), -1);
+  for (auto& tr : tracks) {
+    const double s_end = tr.active ? s_stop : tr.last_alive_s;
+    const double s_beg = tr.initial ? std::max(road.s_begin, 0.0) : tr.first_s;
+    double support = 0.0;
+    for (double c : tr.cnt) support += c > 0 ? o.bin_m : 0.0;
+    if (s_end - s_beg < o.min_lane_length_m || support < 0.5 * o.min_lane_length_m) continue;
+    BinnedSamples bs;
+    for (int b = 0; b < nbins; ++b) {
+      if (tr.cnt[b] <= 0) continue;
+      bs.s.push_back((b + 0.5) * o.bin_m);
+      bs.mean.push_back(tr.sum[b] / tr.cnt[b]);
+      bs.weight.push_back(tr.cnt[b]);
+    }
+    if (bs.s.empty()) continue;
+    Lane lane;
+    lane.s_begin = s_beg;
+    lane.s_end = s_end;
+    lane.centre = CentreLine(fitPiecewiseLinear(bs, o.break_spacing_m, o.break_penalty_m2), s_beg, s_end);
+    for (double w : bs.weight) lane.particle_samples += static_cast<int64_t>(w);
+    lane.split_from = tr.parent;    // track ids for now
+    lane.merges_into = tr.merge_into;
+    keep_index[tr.id] = static_cast<int>(res.lanes.size());
+    lane.id = static_cast<int>(res.lanes.size());
+    res.lanes.push_back(std::move(lane));
+  }
+  // Relations through dropped tracks go to their own relations (a short spur between two lanes).
+  auto resolve = [&](int t, bool up) {
+    for (int guard = 0; t >= 0 && guard < 64; ++guard) {
+      if (keep_index[t] >= 0) return keep_index[t];
+      t = up ? tracks[t].parent : tracks[t].merge_into;
+    }
+    return -1;
+  };
+  for (auto& lane : res.lanes) {
+    lane.split_from = resolve(lane.split_from, true);
+    lane.merges_into = resolve(lane.merges_into, false);
+    if (lane.split_from == lane.id) lane.split_from = -1;
+    if (lane.merges_into == lane.id) lane.merges_into = -1;
+  }
+
+  // --- way-points and boundaries ---
+  auto probe = [&](double s, double d, int dir, uint8_t* hit) {
+    const int i = std::clamp(R.row(s), 0, R.ns - 1);
+    const int j0 = R.col(d);
+    const int steps = static_cast<int>(o.probe_max_m / R.res);
+    for (int k = 1; k <= steps; ++k) {
+      const int j = j0 + dir * k;
+      if (j < 0 || j >= R.nd) break;
+      const uint8_t c = R.at(i, j);
+      if (c < kBlocked) continue;
+      *hit = c;
+      if (c == kSeparation || c == kDashed || c == kSolid) {
+        // The middle of the marking run (the line itself, shared with the neighbour lane).
+        uint8_t strongest = c;
+        int e = j;
+        while (e + dir >= 0 && e + dir < R.nd) {
+          const uint8_t n = R.at(i, e + dir);
+          if (n != kSeparation && n != kDashed && n != kSolid) break;
+          strongest = std::max(strongest, n);
+          e += dir;
+        }
+        *hit = strongest;
+        return R.dOf(j) + (R.dOf(e) - R.dOf(j)) / 2.0;
+      }
+      return R.dOf(j) - dir * R.res / 2.0;  // near edge of a curb, blocked or outside cell
+    }
+    *hit = kUnobserved;
+    return d + dir * o.default_half_width_m;
+  };
+  for (auto& lane : res.lanes) {
+    const double len = lane.s_end - lane.s_begin;
+    const int n = std::max(2, static_cast<int>(std::ceil(len / o.waypoint_spacing_m)) + 1);
+    int count[2][8] = {};
+    for (int k = 0; k < n; ++k) {
+      const double s = lane.s_begin + len * k / (n - 1);
+      const double d = lane.centre.d(s);
+      lane.waypoint_s.push_back(s);
+      lane.waypoints.push_back(frame->toEnu(s, d));
+      for (int side = 0; side < 2; ++side) {
+        uint8_t hit = kUnobserved;
+        const double db = probe(s, d, side == 0 ? 1 : -1, &hit);
+        Boundary& b = side == 0 ? lane.left : lane.right;
+        b.d.push_back(db);
+        b.points.push_back(frame->toEnu(s, db));
+        ++count[side][hit];
+      }
+    }
+    for (int side = 0; side < 2; ++side) {
+      const int* c = count[side];
+      const int paint = c[kSolid] + c[kDashed];
+      Boundary& b = side == 0 ? lane.left : lane.right;
+      if (c[kCurb] > std::max(paint, c[kSeparation])) b.type = map::LineType::kCurb;
+      else if (paint > 0 && c[kSolid] >= 0.5 * (paint + c[kSeparation])) b.type = map::LineType::kSolid;
+      else if (paint > 0.1 * n) b.type = map::LineType::kDashed;
+      else b.type = map::LineType::kVirtual;
+    }
+  }
+  // Index from the left among the lanes present at each lane's middle.
+  for (auto& lane : res.lanes) {
+    const double sm = 0.5 * (lane.s_begin + lane.s_end);
+    int idx = 0;
+    for (const auto& other : res.lanes) {
+      if (&other != &lane && sm >= other.s_begin && sm <= other.s_end && other.centre.d(sm) > lane.centre.d(sm)) ++idx;
+    }
+    lane.index_from_left = idx;
+  }
+  res.stats.fit_s = since(t0);
+  return res;
+}
+
+}  // namespace lanemap::lanes

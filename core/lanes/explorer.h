@@ -1,0 +1,108 @@
+// Lane exploration on one closed atomic road (METHOD.md section 4, Algorithm 1).
+//
+// 1. The road's BEV evidence is resampled into a straightened raster in the road's Frenet frame
+//    (s along the skeleton, d to the left), each cell classified once: unobserved, drivable,
+//    blocked (observed, not drivable), lane separation, dashed, solid, curb, or outside our
+//    direction (beyond the divider of a two-way road).
+// 2. Particle filter: N car footprints (3 m x 1.5 m) start as a strip across the road start and
+//    move by the paper's motion model (Eq. 5) with v ~ U(0.9, 1.1), w ~ U(-0.2, 0.2) per particle
+//    per step, in Frenet coordinates so they follow a curved road. A footprint that touches a
+//    boundary cell dies; dead particles are replaced by copies of surviving particles *near them
+//    in d* (local resampling: the paper's survival weights, without letting one lane's particles
+//    take over another's by drift). Births: where a footprint fits on observed drivable ground that
+//    no particle covers (a turn pocket opening, a bus bay, the lane after a parked car), particles
+//    are seeded; the paper's start strip is the first birth. Runs to s_end (the end ROI).
+// 3. DBSCAN (eps 1 m) over the surviving particles of each step gives the lanes at that step;
+//    clusters are linked along s into lanes, so a lane can start (split) or end (merge) mid-road; a
+//    lane that loses its particles for less than lane_gap_max_m (parked car) continues; lanes
+//    inside one wide cluster (a stretch with no markings) coast with their last offsets.
+// 4. Each lane's particle history is regressed (Eq. 6: piecewise linear with optimised break
+//    points, then a natural cubic spline) as d(s); way-points every waypoint_spacing_m.
+// 5. Boundaries: from each way-point, probe left and right along the normal until a marking, curb,
+//    blocked or outside cell; the marking type is kept (asymmetric, follows the drivable area).
+#pragma once
+
+#include "core/bev/bev_grid.h"
+#include "core/lanes/centre_line.h"
+#include "core/lanes/frenet.h"
+#include "core/lanes/options.h"
+#include "core/map/lane_map.h"
+#include "core/skeleton/skeleton.h"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace lanemap::lanes {
+
+// One atomic road to explore (from skeleton::AtomicRoad).
+struct RoadGeometry {
+  int64_t road_id = -1;
+  int64_t from_node = -1, to_node = -1;  // intersection ids I_i, I_j
+  std::vector<Eigen::Vector2d> polyline;  // ENU, driving direction
+  double s_begin = 0.0, s_end = 0.0;      // leaves I_i's ROI / enters I_j's ROI
+  bool two_way = false;                   // the opposite direction shares the carriageway
+  static RoadGeometry fromSkeleton(const skeleton::AtomicRoad& road);
+};
+
+// Ego pose when the car entered the road (ENU x, y, yaw): the strip starts across it.
+struct EgoPose {
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();
+  double yaw = 0.0;
+};
+
+struct Boundary {
+  std::vector<Eigen::Vector2d> points;  // ENU, at the way-points of the lane
+  std::vector<double> d;                // lateral offsets in the road frame
+  map::LineType type = map::LineType::kVirtual;
+};
+
+struct Lane {
+  int id = 0;                 // index in ExplorationResult::lanes
+  int index_from_left = 0;    // at the middle of the lane, among the lanes present there
+  double s_begin = 0.0, s_end = 0.0;
+  CentreLine centre;          // d(s) in the road's Frenet frame
+  std::vector<double> waypoint_s;
+  std::vector<Eigen::Vector2d> waypoints;  // ENU
+  Boundary left, right;
+  int split_from = -1;        // lane this one branches off at s_begin (turn pocket, bay)
+  int merges_into = -1;       // lane this one runs into at s_end
+  int64_t particle_samples = 0;  // particle positions behind the regression
+  double dAt(double s) const { return centre.d(s); }
+};
+
+struct ExplorationStats {
+  int steps = 0;
+  int births = 0;              // birth events (the start strip included)
+  int64_t particle_steps = 0;  // particles moved and tested
+  int64_t deaths = 0;
+  int tracks = 0;              // lane tracks before dropping short ones
+  double raster_s = 0.0, filter_s = 0.0, fit_s = 0.0;  // seconds
+};
+
+struct ExplorationResult {
+  int64_t road_id = -1, from_node = -1, to_node = -1;
+  std::shared_ptr<const FrenetFrame> frame;
+  std::vector<Lane> lanes;  // left to right where they overlap
+  ExplorationStats stats;
+  // Lanes present at arc length s.
+  int laneCountAt(double s) const;
+  // Optional debug data: surviving particles (s, d) of every `history_stride`-th step.
+  std::vector<Eigen::Vector2d> history;
+};
+
+// Runs Algorithm 1 on a road's BEV grid. Deterministic for options.seed. Throws LanesError on a
+// degenerate road (no length between s_begin and s_end).
+ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road, const ExplorerOptions& options,
+                              const std::optional<EgoPose>& ego = std::nullopt, int history_stride = 0);
+
+// The road's lanes as Lanelet2 lanelets (map::LaneMap): one lanelet per lane piece between split
+// and merge points, left/right LineStrings typed by the probed marking, successors at splits and
+// merges. Ids: (road_id + 1) * 100000 + k, so the roads of one map never collide.
+map::LaneMap toLaneMap(const ExplorationResult& result, double origin_lat = 0.0, double origin_lon = 0.0,
+                       double origin_alt = 0.0);
+
+}  // namespace lanemap::lanes

@@ -1,0 +1,78 @@
+// Parameters of lane exploration (METHOD.md section 4, Algorithm 1), with the paper's values as
+// defaults. config/lane_mapper.yaml `explorer:` holds the same keys; fromYaml reads the ones present.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <stdexcept>
+
+namespace lanemap::lanes {
+
+class LanesError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct ExplorerOptions {
+  // --- particle filter (the paper's values) ---
+  int num_particles = 500;
+  double footprint_length_m = 3.0;
+  double footprint_width_m = 1.5;
+  double v_min = 0.9, v_max = 1.1;       // m/s, drawn per particle per step
+  double w_min = -0.2, w_max = 0.2;      // rad, drawn per particle per step (yaw noise)
+  double dt_s = 1.0;                     // step; ~1 m of travel per step at the defaults
+  double max_heading_rad = 1.0;          // |yaw - road heading| above this: the particle dies
+  uint64_t seed = 1;                     // std::mt19937_64; a run is deterministic for a seed
+
+  // --- which BEV cells kill a particle (fractions of the cell's observations) ---
+  // A cell is a boundary when it shows a solid, dashed, curb line or a lane separation at least
+  // this often; it is blocked when observed but drivable (lane classes + crosswalk + stop line,
+  // which cross lanes and must not stop particles) less often than drivable_fraction. Unobserved
+  // cells (fewer than min_observations) are passable but never give a lane a start (see births).
+  double marking_fraction = 0.3;
+  double separation_fraction = 0.3;
+  double drivable_fraction = 0.5;
+  int min_observations = 1;
+
+  // --- the road's corridor in its Frenet frame (d > 0 left of the driving direction) ---
+  double corridor_half_width_m = 15.0;
+  double frame_spacing_m = 0.5;          // Frenet frame samples along the skeleton polyline
+  double frame_smoothing_m = 6.0;        // moving-average radius of the skeleton polyline
+  bool right_hand_traffic = true;        // two-way road: our lanes are right of the divider
+  double divider_search_m = 3.0;         // look for the direction divider within this of d = 0
+  double divider_bin_m = 10.0;           // along s (also the bins of the carriageway search)
+  double carriageway_wall_m = 1.0;       // blocked/curb this wide (most of a bin) ends our carriageway
+
+  // --- births: particles seeded where a footprint fits on observed drivable ground no particle
+  // covers (turn pockets, bus bays, a lane behind a parked car); the paper's strip at the start is
+  // the first birth ---
+  double birth_every_m = 2.0;
+  double birth_min_free_m = 0.5;         // free footprint-centre interval at least this wide
+  double birth_min_evidence = 0.6;       // fraction of the footprint cells observed drivable
+  int birth_particles = 40;
+
+  // --- clustering and lanes ---
+  double dbscan_eps_m = 1.0;             // the paper's value
+  int dbscan_min_points = 4;
+  double track_tolerance_m = 0.6;        // a cluster continues a lane whose d is within its range +- this
+  double lane_gap_max_m = 20.0;          // a lane with no particles longer than this has ended
+  double same_lane_m = 1.2;              // two lanes closer than this are one
+  double min_lane_length_m = 10.0;       // shorter lanes are dropped
+  double split_neighbour_m = 4.5;        // a lane born/ending this close to another splits/merges
+
+  // --- centre line regression (Eq. 6) and way-points ---
+  double bin_m = 1.0;                    // particle positions are binned along s (exact for Eq. 6)
+  double break_spacing_m = 5.0;          // candidate break points
+  double break_penalty_m2 = 0.3;         // a break must reduce the binned squared error by this
+  double waypoint_spacing_m = 2.0;
+
+  // --- boundaries ---
+  double probe_max_m = 3.5;              // lateral probing range from the centre line
+  double default_half_width_m = 1.75;    // bound where probing finds nothing
+
+  static ExplorerOptions fromYaml(const YAML::Node& node);  // throws LanesError
+  void validate() const;                                    // throws LanesError
+};
+
+}  // namespace lanemap::lanes

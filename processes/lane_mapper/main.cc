@@ -1,0 +1,243 @@
+// lanemap-lane-mapper: runs lane exploration (core/lanes/explorer.h) on every closed atomic road
+// announced on BEV_ROAD, on a worker thread (a long road does not stall LCM handling), stores the
+// road's lanes in the map store atomically (<store>/lanes/road_<id>.osm, Lanelet2, plus the whole
+// <store>/lane_map.osm) and publishes LANE_MAP. On start it reloads the store and republishes it, so
+// a restart loses no finished road.
+//
+//   lanemap-lane-mapper --config config/lane_mapper.yaml [--osm FILE] [--store DIR]
+#include "core/bev/bev_grid.h"
+#include "core/io/lanelet2.h"
+#include "core/lanes/explorer.h"
+#include "core/skeleton/skeleton.h"
+#include "lanemap/bev_road_t.hpp"
+#include "lanemap/lane_map_t.hpp"
+#include "processes/framework/channels.h"
+#include "processes/framework/process.h"
+
+#include <condition_variable>
+#include <deque>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <regex>
+#include <string>
+#include <thread>
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace lanemap;
+
+template <typename T>
+void read(const YAML::Node& node, const char* key, T& value) {
+  if (node && node[key]) value = node[key].as<T>();
+}
+
+int8_t polylineType(map::LineType t) {
+  switch (t) {
+    case map::LineType::kDashed: return polyline_t::TYPE_DASHED;
+    case map::LineType::kSolid:
+    case map::LineType::kSolidSolid: return polyline_t::TYPE_SOLID;
+    case map::LineType::kCurb: return polyline_t::TYPE_CURB;
+    case map::LineType::kVirtual: return polyline_t::TYPE_VIRTUAL;
+    case map::LineType::kStopLine: return polyline_t::TYPE_STOP_LINE;
+  }
+  return polyline_t::TYPE_UNKNOWN;
+}
+
+polyline_t toPolyline(const std::vector<Eigen::Vector3d>& pts, int8_t type) {
+  polyline_t p;
+  p.num_points = static_cast<int32_t>(pts.size());
+  for (const auto& q : pts) {
+    p.east.push_back(q.x());
+    p.north.push_back(q.y());
+    p.up.push_back(q.z());
+  }
+  p.type = type;
+  return p;
+}
+
+class LaneMapperApp {
+ public:
+  LaneMapperApp(Process& process, std::unique_ptr<skeleton::Skeleton> sk, lanes::ExplorerOptions options,
+                std::string store, const std::string& channel, int queue)
+      : process_(process), sk_(std::move(sk)), options_(options), store_(std::move(store)) {
+    fs::create_directories(fs::path(store_) / "lanes");
+    reloadStore();
+    worker_ = std::thread([this] { work(); });
+    auto* sub = process_.lcm().subscribe(channel, &LaneMapperApp::onBevRoad, this);
+    sub->setQueueCapacity(queue);
+    process_.setState("ready");
+  }
+  ~LaneMapperApp() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    worker_.join();
+  }
+
+ private:
+  void onBevRoad(const lcm::ReceiveBuffer*, const std::string&, const bev_road_t* msg) {
+    process_.counters().add("bev_roads_received");
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      jobs_.push_back(*msg);
+      process_.counters().set("queue_length", static_cast<int64_t>(jobs_.size()));
+    }
+    cv_.notify_one();
+  }
+
+  void work() {
+    for (;;) {
+      bev_road_t job;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [this] { return stop_ || !jobs_.empty(); });
+        if (stop_) return;
+        job = jobs_.front();
+        jobs_.pop_front();
+        process_.counters().set("queue_length", static_cast<int64_t>(jobs_.size()));
+      }
+      try {
+        mapRoad(job);
+      } catch (const std::exception& e) {
+        process_.counters().add("roads_failed");
+        std::cerr << "lane_mapper: road " << job.road_id << ": " << e.what() << "\n";
+      }
+    }
+  }
+
+  void mapRoad(const bev_road_t& job) {
+    const skeleton::AtomicRoad* road = sk_->road(job.road_id);
+    if (!road) throw std::runtime_error("unknown road id " + std::to_string(job.road_id));
+    const bev::BevGrid grid = bev::BevGrid::load(job.path);
+    const auto t0 = std::chrono::steady_clock::now();
+    const lanes::ExplorationResult res = lanes::exploreRoad(grid, lanes::RoadGeometry::fromSkeleton(*road), options_);
+    const auto& o = sk_->frame().origin();
+    map::LaneMap m = lanes::toLaneMap(res, o.lat, o.lon, o.alt);
+    io::writeLanelet2(m, roadFile(job.road_id));  // atomic: a crash leaves the old file or the new one
+    {
+      std::lock_guard<std::mutex> lock(roads_mutex_);
+      roads_[job.road_id] = m;
+      writeWholeMap();
+    }
+    process_.latency().add(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    process_.counters().add("roads_mapped");
+    process_.counters().add("lanes_found", static_cast<int64_t>(res.lanes.size()));
+    publish(job.road_id, m, job.utime);
+  }
+
+  std::string roadFile(int64_t id) const { return (fs::path(store_) / "lanes" / ("road_" + std::to_string(id) + ".osm")).string(); }
+  std::string wholeMapFile() const { return (fs::path(store_) / "lane_map.osm").string(); }
+
+  void writeWholeMap() {
+    map::LaneMap all;
+    const auto& o = sk_->frame().origin();
+    all.origin_lat = o.lat;
+    all.origin_lon = o.lon;
+    all.origin_alt = o.alt;
+    for (const auto& [id, m] : roads_) {
+      all.lines.insert(all.lines.end(), m.lines.begin(), m.lines.end());
+      all.lanelets.insert(all.lanelets.end(), m.lanelets.begin(), m.lanelets.end());
+    }
+    if (!all.lanelets.empty()) io::writeLanelet2(all, wholeMapFile());
+  }
+
+  void reloadStore() {
+    const std::regex name("road_(-?[0-9]+)\\.osm");
+    const auto& o = sk_->frame().origin();
+    io::Lanelet2ReadOptions ro;
+    ro.origin_alt = o.alt;
+    for (const auto& entry : fs::directory_iterator(fs::path(store_) / "lanes")) {
+      std::smatch mt;
+      const std::string fname = entry.path().filename().string();
+      if (!std::regex_match(fname, mt, name)) continue;
+      try {
+        roads_[std::stoll(mt[1])] = io::readLanelet2(entry.path().string(), o.lat, o.lon, ro);
+        process_.counters().add("roads_loaded");
+      } catch (const std::exception& e) {
+        std::cerr << "lane_mapper: skipping " << entry.path() << ": " << e.what() << "\n";
+      }
+    }
+    for (const auto& [id, m] : roads_) publish(id, m, nowUtime());
+  }
+
+  void publish(int64_t road_id, const map::LaneMap& m, int64_t utime) {
+    lane_map_t msg;
+    msg.utime = utime;
+    msg.kind = lane_map_t::KIND_ROAD;
+    msg.id = road_id;
+    msg.origin_latitude = m.origin_lat;
+    msg.origin_longitude = m.origin_lon;
+    msg.origin_altitude = m.origin_alt;
+    for (const auto& ll : m.lanelets) {
+      lane_t lane;
+      lane.lane_id = ll.id;
+      lane.index_from_left = ll.index_from_left;
+      lane.centre = toPolyline(ll.centre, polyline_t::TYPE_VIRTUAL);
+      const map::LineString* l = m.line(ll.left_id);
+      const map::LineString* r = m.line(ll.right_id);
+      lane.left_boundary = l ? toPolyline(l->points, polylineType(l->type)) : toPolyline({}, polyline_t::TYPE_UNKNOWN);
+      lane.right_boundary = r ? toPolyline(r->points, polylineType(r->type)) : toPolyline({}, polyline_t::TYPE_UNKNOWN);
+      lane.successors = ll.successors;
+      lane.num_successors = static_cast<int32_t>(ll.successors.size());
+      msg.lanes.push_back(std::move(lane));
+    }
+    msg.num_lanes = static_cast<int32_t>(msg.lanes.size());
+    msg.map_path = wholeMapFile();
+    std::lock_guard<std::mutex> lock(publish_mutex_);
+    process_.lcm().publish(channels::kLaneMap, &msg);
+    process_.counters().add("lane_maps_published");
+  }
+
+  Process& process_;
+  std::unique_ptr<skeleton::Skeleton> sk_;
+  lanes::ExplorerOptions options_;
+  std::string store_;
+  std::mutex mutex_, roads_mutex_, publish_mutex_;
+  std::condition_variable cv_;
+  std::deque<bev_road_t> jobs_;
+  bool stop_ = false;
+  std::map<int64_t, map::LaneMap> roads_;
+  std::thread worker_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  lanemap::Process process("lane_mapper");
+  std::string osm_flag, store_flag;
+  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: config osm)");
+  process.cli().add_option("--store", store_flag, "map store folder (default: config store)");
+  if (int rc = process.init(argc, argv); rc >= 0) return rc;
+  try {
+    const YAML::Node& config = process.config();
+    std::string osm = osm_flag, store = store_flag;
+    if (osm.empty()) read(config, "osm", osm);
+    if (store.empty()) read(config, "store", store);
+    if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the config");
+    if (store.empty()) throw std::runtime_error("no map store: give --store or `store:` in the config");
+    lanemap::skeleton::SkeletonOptions options;
+    read(config, "junction_merge_radius_m", options.junction_merge_radius_m);
+    if (config["origin"]) {
+      options.origin = lanemap::geo::LatLonAlt{config["origin"]["lat"].as<double>(), config["origin"]["lon"].as<double>(), 0.0};
+    }
+    auto sk = std::make_unique<lanemap::skeleton::Skeleton>(
+        lanemap::skeleton::Skeleton::build(lanemap::osm::readOsm(osm), options));
+    const auto explorer = lanemap::lanes::ExplorerOptions::fromYaml(config["explorer"]);
+    std::string channel = lanemap::channels::kBevRoad;
+    int queue = 100;
+    read(config, "bev_channel", channel);
+    read(config, "queue_capacity", queue);
+    std::cerr << "lane_mapper: " << sk->roads().size() << " atomic roads from " << osm << ", store " << store << "\n";
+    LaneMapperApp app(process, std::move(sk), explorer, store, channel, queue);
+    return process.spin();
+  } catch (const std::exception& e) {
+    std::cerr << "lane_mapper: " << e.what() << "\n";
+    return 2;
+  }
+}

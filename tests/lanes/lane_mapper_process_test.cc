@@ -1,0 +1,186 @@
+// lanemap-lane-mapper over LCM inside a private network namespace (tests/common/netns.h): a saved
+// BEV grid of a real West Oakland road (painted with two lanes per direction) goes in on BEV_ROAD;
+// LANE_MAP must carry our direction's two lanes at the painted centre lines, the store must hold
+// the road's Lanelet2 file and the whole map; a bad grid is counted and the process goes on; a
+// restarted process republishes the stored road without any input.
+#include "core/io/lanelet2.h"
+#include "core/osm/osm_data.h"
+#include "core/skeleton/skeleton.h"
+#include "lanemap/bev_road_t.hpp"
+#include "lanemap/lane_map_t.hpp"
+#include "lanemap/status_t.hpp"
+#include "tests/common/child_process.h"
+#include "tests/common/netns.h"
+#include "tests/common/sim_drive.h"
+#include "tests/lanes/synthetic_bev.h"
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <chrono>
+#include <filesystem>
+
+namespace {
+
+using namespace lanemap;
+namespace fs = std::filesystem;
+
+const std::string kOsm = std::string(LANEMAP_DATA_DIR) + "/osm/west-oakland.osm";
+const std::string kBinary = std::string(LANEMAP_BIN_DIR) + "/lanemap-lane-mapper";
+const std::string kConfig = std::string(LANEMAP_SOURCE_DIR) + "/config/lane_mapper.yaml";
+
+struct Collector {
+  std::vector<lane_map_t> maps;
+  std::vector<status_t> status;
+  void onMap(const lcm::ReceiveBuffer*, const std::string&, const lane_map_t* m) { maps.push_back(*m); }
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&, const status_t* m) {
+    if (m->process == "lane_mapper") status.push_back(*m);
+  }
+};
+
+int64_t counter(const status_t& s, const std::string& name) {
+  for (int i = 0; i < s.num_counters; ++i) {
+    if (s.counter_names[i] == name) return s.counter_values[i];
+  }
+  return -1;
+}
+
+// The longest nearly straight two-way road (its polyline within 0.3 m of the chord).
+const skeleton::AtomicRoad* straightRoad(const skeleton::Skeleton& sk) {
+  const skeleton::AtomicRoad* best = nullptr;
+  for (const auto& r : sk.roads()) {
+    if (r.reverse_id < 0 || r.s_end - r.s_begin < 60.0) continue;
+    const Eigen::Vector2d a = r.polyline.front(), u = (r.polyline.back() - a).normalized();
+    double dev = 0;
+    for (const auto& p : r.polyline) dev = std::max(dev, std::abs(u.x() * (p - a).y() - u.y() * (p - a).x()));
+    if (dev < 0.3 && (!best || r.length > best->length)) best = &r;
+  }
+  return best;
+}
+
+// Two lanes per direction, 3.5 m, double solid line on the road's centre line.
+lanes::testing::Layout twoByTwo(const skeleton::AtomicRoad& r) {
+  using namespace lanes::testing;
+  Layout L;
+  L.ref.origin = r.polyline.front();
+  const Eigen::Vector2d u = r.polyline.back() - r.polyline.front();
+  L.ref.heading = std::atan2(u.y(), u.x());
+  L.ref.length = u.norm();
+  for (double side : {1.0, -1.0}) {
+    L.lines.push_back({constant(side * 0.1), -1e9, 1e9, Line::kSolid, false});
+    L.lines.push_back({constant(side * 3.6), -1e9, 1e9, Line::kDashed, true});
+    L.lines.push_back({constant(side * 7.1), -1e9, 1e9, Line::kSolid, false});
+    L.lines.push_back({constant(side * 7.6), -1e9, 1e9, Line::kCurb, false});
+  }
+  L.areas.push_back({constant(-7.6), constant(7.6)});
+  return L;
+}
+
+bool waitFor(lcm::LCM& lcm, const std::function<bool()>& done, int seconds) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
+  while (!done() && std::chrono::steady_clock::now() < deadline) lcm.handleTimeout(100);
+  return done();
+}
+
+TEST(LaneMapperProcess, MapsARoadStoresItAndReloadsAfterRestart) {
+  if (!lanemap::testing::inPrivateNetns()) {
+    ASSERT_EQ(lanemap::testing::rerunInPrivateNetns(), 0);
+    return;
+  }
+  const skeleton::Skeleton sk = skeleton::Skeleton::build(osm::readOsm(kOsm));
+  const skeleton::AtomicRoad* road = straightRoad(sk);
+  ASSERT_NE(road, nullptr);
+  const auto layout = twoByTwo(*road);
+  lanemap::testing::TempDir tmp("lane-mapper");
+  const std::string grid_path = tmp.str("bev_road.bin");
+  lanes::testing::paint(layout).save(grid_path);
+  const std::string store = tmp.str("store");
+  const std::string url = lanemap::testing::testUdpmUrl(7683);
+
+  lcm::LCM lcm(url);
+  ASSERT_TRUE(lcm.good());
+  Collector c;
+  lcm.subscribe("LANE_MAP", &Collector::onMap, &c)->setQueueCapacity(100);
+  lcm.subscribe("STATUS", &Collector::onStatus, &c)->setQueueCapacity(100);
+  {
+    lanemap::testing::ChildProcess proc({kBinary, "--config", kConfig, "--osm", kOsm, "--store", store, "--lcm-url", url});
+    ASSERT_TRUE(proc.started());
+    ASSERT_TRUE(waitFor(lcm, [&] { return !c.status.empty(); }, 20)) << "no STATUS from lanemap-lane-mapper";
+    EXPECT_TRUE(c.maps.empty());  // an empty store: nothing to republish
+
+    bev_road_t bad{};
+    bad.road_id = road->id;
+    bad.path = tmp.str("missing.bin");
+    lcm.publish("BEV_ROAD", &bad);
+    bev_road_t msg{};
+    msg.utime = 42;
+    msg.road_id = road->id;
+    msg.from_node = road->from;
+    msg.to_node = road->to;
+    msg.path = grid_path;
+    msg.resolution_m = 0.1;
+    lcm.publish("BEV_ROAD", &msg);
+    ASSERT_TRUE(waitFor(lcm, [&] { return !c.maps.empty(); }, 30)) << "no LANE_MAP";
+    ASSERT_TRUE(waitFor(lcm, [&] { return counter(c.status.back(), "roads_mapped") == 1; }, 5));
+    EXPECT_EQ(counter(c.status.back(), "roads_failed"), 1);
+    EXPECT_EQ(counter(c.status.back(), "bev_roads_received"), 2);
+    EXPECT_GE(proc.stop(), 0);
+  }
+  ASSERT_EQ(c.maps.size(), 1u);
+  const lane_map_t first = c.maps[0];
+  EXPECT_EQ(first.kind, +lane_map_t::KIND_ROAD);
+  EXPECT_EQ(first.id, road->id);
+  EXPECT_EQ(first.utime, 42);
+  ASSERT_EQ(first.num_lanes, 2);
+  // Our direction (right of the centre line): lanes at d = -1.85 and -5.35 m of the painted frame.
+  for (const auto& lane : first.lanes) {
+    const double truth = lane.index_from_left == 0 ? -1.85 : -5.35;
+    double sq = 0;
+    for (int i = 0; i < lane.centre.num_points; ++i) {
+      const Eigen::Vector2d sd = layout.ref.toSD(Eigen::Vector2d(lane.centre.east[i], lane.centre.north[i]));
+      sq += (sd.y() - truth) * (sd.y() - truth);
+    }
+    EXPECT_LT(std::sqrt(sq / lane.centre.num_points), 0.15) << "lane " << lane.index_from_left;
+    EXPECT_EQ(lane.left_boundary.type, lane.index_from_left == 0 ? +polyline_t::TYPE_SOLID : +polyline_t::TYPE_DASHED);
+    EXPECT_EQ(lane.right_boundary.type, lane.index_from_left == 0 ? +polyline_t::TYPE_DASHED : +polyline_t::TYPE_SOLID);
+  }
+  // The store: the road's file and the whole map, both readable Lanelet2.
+  const std::string road_file = store + "/lanes/road_" + std::to_string(road->id) + ".osm";
+  ASSERT_TRUE(fs::exists(road_file));
+  EXPECT_EQ(first.map_path, store + "/lane_map.osm");
+  const auto& o = sk.frame().origin();
+  EXPECT_EQ(io::readLanelet2(first.map_path, o.lat, o.lon).lanelets.size(), 2u);
+
+  // Restart: the stored road comes back without any BEV_ROAD.
+  c.maps.clear();
+  c.status.clear();
+  {
+    lanemap::testing::ChildProcess proc({kBinary, "--config", kConfig, "--osm", kOsm, "--store", store, "--lcm-url", url});
+    ASSERT_TRUE(proc.started());
+    // (a late STATUS of the first run may still arrive: wait for one of this run)
+    EXPECT_TRUE(waitFor(lcm, [&] { return !c.maps.empty() && !c.status.empty() && counter(c.status.back(), "roads_loaded") == 1; }, 20));
+    EXPECT_GE(proc.stop(), 0);
+  }
+  ASSERT_EQ(c.maps.size(), 1u);
+  const lane_map_t& again = c.maps[0];
+  EXPECT_EQ(again.id, road->id);
+  ASSERT_EQ(again.num_lanes, first.num_lanes);
+  for (int k = 0; k < again.num_lanes; ++k) {
+    const auto& a = again.lanes[k].centre;
+    const auto& b = first.lanes[k].centre;
+    ASSERT_EQ(a.num_points, b.num_points);
+    for (int i = 0; i < a.num_points; ++i) {
+      EXPECT_NEAR(a.east[i], b.east[i], 0.005);
+      EXPECT_NEAR(a.north[i], b.north[i], 0.005);
+    }
+    EXPECT_EQ(again.lanes[k].left_boundary.type, first.lanes[k].left_boundary.type);
+  }
+}
+
+TEST(LaneMapperProcess, FailsClearlyWithoutAnOsmFile) {
+  const auto r = lanemap::testing::runCommand(kBinary + " --config " + kConfig + " --osm /nonexistent.osm --store /tmp --lcm-url memq://");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("nonexistent.osm"), std::string::npos) << r.output;
+}
+
+}  // namespace

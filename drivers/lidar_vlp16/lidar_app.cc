@@ -2,7 +2,7 @@
 #include "drivers/lidar_vlp16/lidar_app.h"
 
 #include "core/lidar/pcap.h"
-#include "drivers/lidar_vlp16/stop_signals.h"
+#include "processes/framework/stop_signals.h"
 #include "lanemap/lidar_packets_t.hpp"
 #include "lanemap/lidar_points_t.hpp"
 

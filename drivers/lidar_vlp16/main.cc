@@ -4,7 +4,7 @@
 // `--pcap FILE [--rate-scale X]` replays a capture (pcap or raw 1206-byte payloads) through the
 // same path and exits at its end.
 #include "drivers/lidar_vlp16/lidar_app.h"
-#include "drivers/lidar_vlp16/stop_signals.h"
+#include "processes/framework/stop_signals.h"
 #include "processes/framework/process.h"
 
 #include <iostream>
@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
     if (position_port) settings.position_port = *position_port;
     settings.publish_points = settings.publish_points || publish_points;
     settings.validate();
-    lanemap::drivers::setStopSignalsBlocked(true);  // only the driver's worker thread takes them
+    lanemap::setStopSignalsBlocked(true);  // only the driver's worker thread takes them
     lanemap::drivers::LidarApp lidar(process, settings);
     const int rc = process.spin();
     return process.counters().get("replay_errors") > 0 ? 1 : rc;  // e.g. a pcap cut mid-record

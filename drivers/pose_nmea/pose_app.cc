@@ -34,7 +34,7 @@ void checkKeys(const YAML::Node& node, const std::set<std::string>& known,
 }
 
 // SIGINT/SIGTERM go to the worker, never to the main thread's LCM wait (see lidar_vlp16's
-// stop_signals.h: Process::spin() treats an interrupted wait as a failure).
+// processes/framework/stop_signals.h: Process::spin() treats an interrupted wait as a failure).
 void unblockStopSignals() {
   sigset_t set;
   sigemptyset(&set);

@@ -7,7 +7,7 @@
 
 #include <pthread.h>
 
-namespace lanemap::drivers {
+namespace lanemap {
 
 inline void setStopSignalsBlocked(bool blocked) {
   sigset_t set;
@@ -17,4 +17,4 @@ inline void setStopSignalsBlocked(bool blocked) {
   pthread_sigmask(blocked ? SIG_BLOCK : SIG_UNBLOCK, &set, nullptr);
 }
 
-}  // namespace lanemap::drivers
+}  // namespace lanemap

@@ -23,3 +23,11 @@ du -sh "$out/drive"/* | sed 's/^/   /'
 
 echo "== lane exploration (particle filter per 100 m of road, N = 500 and 2000)"
 "$bin/lanemap-bench-lanes"
+
+# Issue 4: BEV projection per frame (flat, LIDAR mesh, cv::warpPerspective IPM), mesh per sweep, and
+# the memory of accumulating a short and a long drive (it must stay flat: one grid per open road).
+echo "== BEV builder: projection and mesh"
+"$bin/lanemap-bench-bev"
+echo "== BEV builder: memory, 30 s drive vs 120 s drive"
+"$bin/lanemap-bench-bev" --memory 30
+"$bin/lanemap-bench-bev" --memory 120

@@ -1,0 +1,335 @@
+#include "core/bev/bev_builder.h"
+
+#include <opencv2/imgcodecs.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <stdexcept>
+#include <string>
+
+namespace lanemap::bev {
+
+namespace {
+
+template <typename T>
+void read(const YAML::Node& node, const char* key, T& value) {
+  if (node && node[key]) value = node[key].as<T>();
+}
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void readGround(const YAML::Node& n, ground::GroundExtractionOptions& g) {
+  read(n, "sectors", g.sectors);
+  read(n, "range_edges_m", g.range_edges_m);
+  read(n, "band_base_m", g.band_base_m);
+  read(n, "band_slope", g.band_slope);
+  read(n, "distance_threshold_m", g.distance_threshold_m);
+  read(n, "max_tilt_deg", g.max_tilt_deg);
+  read(n, "min_points", g.min_points);
+  read(n, "max_iterations", g.max_iterations);
+  if (g.sectors < 1 || g.range_edges_m.size() < 2) throw std::runtime_error("lidar.ground: sectors >= 1 and two range edges at least");
+}
+
+}  // namespace
+
+BevBuilderOptions BevBuilderOptions::fromYaml(const YAML::Node& n) {
+  BevBuilderOptions o;
+  read(n["grid"], "resolution_m", o.accumulator.grid.resolution_m);
+  read(n["grid"], "tile_cells", o.accumulator.grid.tile_cells);
+  o.projector.resolution_m = o.accumulator.grid.resolution_m;
+  const YAML::Node p = n["projection"];
+  read(p, "max_range_m", o.projector.max_range_m);
+  read(p, "sample_spacing_m", o.projector.sample_spacing_m);
+  read(p, "lane_separation", o.projector.lane_separation);
+  read(p, "max_separation_gap_m", o.projector.max_separation_gap_m);
+  read(n["corridor"], "half_width_m", o.accumulator.corridor.half_width_m);
+  read(n["corridor"], "mask_cell_m", o.accumulator.corridor.mask_cell_m);
+  read(n["corridor"], "include_rois", o.accumulator.corridor.include_rois);
+  read(n, "history_s", o.accumulator.history_s);
+  const YAML::Node l = n["lidar"];
+  read(l, "enabled", o.use_lidar);
+  read(l, "async", o.async_mesh);
+  read(l, "max_mesh_age_s", o.max_mesh_age_s);
+  read(l, "max_edge_m", o.ground.max_edge_m);
+  read(l, "max_range_m", o.ground.max_range_m);
+  read(l, "index_cell_m", o.ground.index.cell_m);
+  if (l) readGround(l["ground"], o.ground.extraction);
+  read(n["poses"], "keep_s", o.pose_keep_s);
+  read(n["poses"], "max_gap_s", o.max_pose_gap_s);
+  read(n, "max_pending_frames", o.max_pending_frames);
+  read(n, "close_delay_s", o.close_delay_s);
+  if (!(o.projector.max_range_m > 0.0) || !(o.ground.index.cell_m > 0.0) || !(o.pose_keep_s > 0.0)) {
+    throw std::runtime_error("bev_builder config: projection.max_range_m, lidar.index_cell_m, poses.keep_s must be > 0");
+  }
+  return o;
+}
+
+bool decodeLabelImage(LabelEncoding encoding, const uint8_t* data, size_t size, int width, int height, cv::Mat* out) {
+  if (width <= 0 || height <= 0) return false;
+  if (encoding == LabelEncoding::kRaw) {
+    if (size != static_cast<size_t>(width) * height) return false;
+    *out = cv::Mat(height, width, CV_8UC1, const_cast<uint8_t*>(data)).clone();
+    return true;
+  }
+  if (encoding != LabelEncoding::kPng || size == 0) return false;
+  const cv::Mat buf(1, static_cast<int>(size), CV_8UC1, const_cast<uint8_t*>(data));
+  cv::Mat img;
+  try {
+    img = cv::imdecode(buf, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception&) {
+    return false;
+  }
+  if (img.empty() || img.type() != CV_8UC1 || img.cols != width || img.rows != height) return false;
+  *out = img;
+  return true;
+}
+
+BevBuilder::BevBuilder(const skeleton::Skeleton& skeleton, const camera::CameraModel& camera, BevBuilderOptions options)
+    : skeleton_(skeleton),
+      options_(options),
+      projector_(camera, options.projector),
+      accumulator_(skeleton, options.accumulator),
+      poses_(options.pose_keep_s, options.max_pose_gap_s) {
+  if (options_.use_lidar && options_.async_mesh) worker_ = std::thread([this] { workerLoop(); });
+}
+
+BevBuilder::~BevBuilder() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  cv_.notify_all();
+  if (worker_.joinable()) worker_.join();
+}
+
+void BevBuilder::addPose(const TimedPose& pose) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++stats_.poses_received;
+  if (!pose.position.allFinite() || !pose.orientation.coeffs().allFinite()) {
+    ++stats_.poses_invalid;
+    return;
+  }
+  if (!poses_.add(pose)) {
+    ++stats_.poses_out_of_order;
+    return;
+  }
+  drainFrames();
+  tryPendingSweep();
+  finishCloses(false);
+}
+
+void BevBuilder::addEncodedFrame(int64_t utime, LabelEncoding encoding, const std::vector<uint8_t>& data, int width,
+                                 int height) {
+  cv::Mat labels;
+  if (!decodeLabelImage(encoding, data.data(), data.size(), width, height, &labels)) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++stats_.frames_received;
+    ++stats_.frames_decode_error;
+    return;
+  }
+  addFrame(utime, labels);
+}
+
+void BevBuilder::addFrame(int64_t utime, const cv::Mat& labels) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++stats_.frames_received;
+  switch (projector_.check(labels)) {
+    case LabelCheck::kOk: break;
+    case LabelCheck::kUnknownClass: ++stats_.frames_unknown_class; return;
+    default: ++stats_.frames_wrong_size; return;
+  }
+  if (utime <= last_frame_utime_) {
+    ++stats_.frames_out_of_order;
+    return;
+  }
+  last_frame_utime_ = utime;
+  if (pending_.size() >= options_.max_pending_frames) {
+    pending_.pop_front();
+    ++stats_.frames_queue_full;
+  }
+  pending_.push_back(PendingFrame{utime, labels.clone()});
+  drainFrames();
+}
+
+// Projects the waiting frames whose pose is known, oldest first; stops at the first that needs a
+// later pose.
+void BevBuilder::drainFrames() {
+  while (!pending_.empty()) {
+    const PendingFrame& f = pending_.front();
+    Eigen::Isometry3d pose;
+    const auto r = poses_.lookup(f.utime, &pose);
+    if (r == PoseBuffer::Lookup::kTooNew || r == PoseBuffer::Lookup::kEmpty) return;
+    if (r == PoseBuffer::Lookup::kOk) {
+      project(f.utime, f.labels, pose);
+    } else if (r == PoseBuffer::Lookup::kTooOld) {
+      ++stats_.frames_late;
+    } else {
+      ++stats_.frames_no_pose;
+    }
+    pending_.pop_front();
+  }
+}
+
+void BevBuilder::project(int64_t utime, const cv::Mat& labels, const Eigen::Isometry3d& pose) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::shared_ptr<const ground::SweepGround> mesh = mesh_;
+  const bool use_mesh = mesh && mesh->mesh &&
+                        std::abs(static_cast<double>(utime - mesh->utime)) <= options_.max_mesh_age_s * 1e6;
+  FrameSplat splat = projector_.project(labels, pose, use_mesh ? mesh->mesh.get() : nullptr);
+  splat.utime = utime;
+  accumulator_.add(splat);
+  ++stats_.frames_projected;
+  ++(use_mesh ? stats_.frames_mesh : stats_.frames_flat);
+  const double ms = msSince(t0);
+  stats_.project_ms_sum += ms;
+  stats_.project_ms_max = std::max(stats_.project_ms_max, ms);
+}
+
+void BevBuilder::addSweep(SweepData sweep) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++stats_.sweeps_received;
+  if (!options_.use_lidar) return;
+  if (sweep.packets.empty() || sweep.packets.size() != sweep.packet_utime.size()) {
+    ++stats_.sweeps_empty;
+    return;
+  }
+  if (pending_sweep_) ++stats_.sweeps_no_pose;  // the older one never got its poses
+  pending_sweep_ = std::move(sweep);
+  tryPendingSweep();
+}
+
+// Decodes the waiting sweep once the poses cover its last packet; builds (or queues) its mesh.
+void BevBuilder::tryPendingSweep() {
+  if (!pending_sweep_ || poses_.newest() < pending_sweep_->packet_utime.back()) return;
+  std::vector<ground::SweepPacket> packets;
+  for (size_t i = 0; i < pending_sweep_->packets.size(); ++i) {
+    const auto& p = pending_sweep_->packets[i];
+    packets.push_back(ground::SweepPacket{pending_sweep_->packet_utime[i], p.data(), p.size()});
+  }
+  auto points = ground::sweepToEnu(packets, options_.lidar_to_vehicle, [this](int64_t u) { return poses_.at(u); });
+  pending_sweep_.reset();
+  if (!points) {
+    ++stats_.sweeps_no_pose;
+    return;
+  }
+  if (!options_.async_mesh) {
+    buildMesh(*points);
+    return;
+  }
+  if (work_) ++stats_.sweeps_replaced;
+  work_ = std::move(*points);
+  cv_.notify_all();
+}
+
+// Called with mutex_ held (sync mode) or without it (worker); takes the lock only to publish.
+void BevBuilder::buildMesh(const ground::SweepPoints& points) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto g = std::make_shared<const ground::SweepGround>(ground::buildSweepGround(points, options_.ground));
+  const double ms = msSince(t0);
+  auto publish = [&] {
+    mesh_ = g;
+    ++stats_.sweeps_meshed;
+    stats_.mesh_ms_sum += ms;
+    stats_.mesh_ms_max = std::max(stats_.mesh_ms_max, ms);
+  };
+  if (options_.async_mesh) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    publish();
+  } else {
+    publish();
+  }
+}
+
+void BevBuilder::workerLoop() {
+  for (;;) {
+    ground::SweepPoints points;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      working_ = false;
+      cv_.notify_all();
+      cv_.wait(lock, [this] { return stop_ || work_.has_value(); });
+      if (stop_) return;
+      points = std::move(*work_);
+      work_.reset();
+      working_ = true;
+    }
+    buildMesh(points);
+  }
+}
+
+void BevBuilder::roadEntered(int64_t road_id, int64_t utime) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (int64_t id : accumulator_.activeRoads()) {
+    if (id != road_id && !closing_.count(id) && accumulator_.discard(id)) ++stats_.roads_discarded;
+  }
+  if (accumulator_.active(road_id)) return;
+  if (accumulator_.open(road_id, utime)) {
+    ++stats_.roads_opened;
+  } else {
+    ++stats_.events_unknown_road;
+  }
+}
+
+void BevBuilder::roadClosed(int64_t road_id, int64_t utime) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!accumulator_.active(road_id)) {
+    ++stats_.events_unknown_road;
+    return;
+  }
+  closing_[road_id] = utime;
+  finishCloses(false);
+}
+
+void BevBuilder::roadsAbandoned(int64_t) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (int64_t id : accumulator_.activeRoads()) {
+    if (!closing_.count(id) && accumulator_.discard(id)) ++stats_.roads_discarded;
+  }
+}
+
+// Hands over the closing roads whose delay has passed (all of them at the end of the input).
+void BevBuilder::finishCloses(bool all) {
+  for (auto it = closing_.begin(); it != closing_.end();) {
+    const bool due = all || static_cast<double>(poses_.newest() - it->second) >= options_.close_delay_s * 1e6;
+    const bool frames_waiting = !all && !pending_.empty() && pending_.front().utime <= it->second;
+    if (!due || frames_waiting) {
+      ++it;
+      continue;
+    }
+    if (auto r = accumulator_.close(it->first, it->second)) {
+      closed_.push_back(std::move(*r));
+      ++stats_.roads_closed;
+    }
+    it = closing_.erase(it);
+  }
+}
+
+void BevBuilder::finish() {
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    cv_.wait(lock, [this] { return !worker_.joinable() || (!work_ && !working_); });
+    drainFrames();
+    finishCloses(true);
+  }
+}
+
+std::vector<RoadBev> BevBuilder::takeClosed() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<RoadBev> out = std::move(closed_);
+  closed_.clear();
+  return out;
+}
+
+BevBuilderStats BevBuilder::stats() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stats_;
+}
+
+std::shared_ptr<const ground::SweepGround> BevBuilder::latestMesh() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return mesh_;
+}
+
+}  // namespace lanemap::bev

@@ -1,0 +1,149 @@
+// The bev_builder's logic, LCM-free (processes/bev_builder is a thin wrapper; tests and offline
+// tools drive this class directly from a log): poses, semantic frames, LIDAR sweeps and road events
+// in; one BEV grid per closed atomic road out (METHOD.md section 3).
+//
+// - Poses go into a PoseBuffer; a frame is projected with the pose interpolated at ITS utime. A
+//   frame newer than the newest pose waits in a short queue (the segmenter and the pose source are
+//   not synchronised) and is projected when a later pose arrives. Frames that are out of order,
+//   older than the pose history (late), inside a pose gap, of the wrong size or type, with unknown
+//   class ids, or undecodable are counted and skipped (stats()); nothing blocks.
+// - Poses that are NaN/infinite or out of order are counted and ignored.
+// - LIDAR: a sweep waits (at most one) until the poses cover its last packet, is decoded and moved
+//   to ENU in the caller's thread (a few ms), and its ground mesh (extraction + Delaunay + index,
+//   tens of ms) is built either in the caller's thread (async_mesh = false: deterministic, tests)
+//   or in a worker thread (async_mesh = true, the process): the LCM thread then never waits for a
+//   mesh, a sweep arriving while the worker is busy replaces the waiting one (counted), and frames
+//   use the newest finished mesh. A frame uses the mesh when it is at most max_mesh_age_s from the
+//   frame's time: the mesh is in ENU and the world is static, so a mesh from the previous sweep
+//   (0.1 s, ~1 m of driving earlier) still covers what the camera sees; older, or none: the flat
+//   plane. The sweep covering the frame's own time ends after the frame, so waiting for it would
+//   delay every frame by up to a sweep for no gain.
+// - Roads: ROAD_EVENT "entered" opens a RoadBev (road_bev.h); "reached intersection" closes it
+//   once the poses are close_delay_s past the event (frames still waiting for their pose then go in
+//   first), and the grid is handed over through takeClosed(). "Left map" / "pose lost" discard the
+//   open roads (incomplete). finish() hands over the roads still closing (end of a log).
+#pragma once
+
+#include "core/bev/pose_buffer.h"
+#include "core/bev/projector.h"
+#include "core/bev/road_bev.h"
+#include "core/camera/camera_model.h"
+#include "core/ground/sweep_ground.h"
+#include "core/skeleton/skeleton.h"
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <vector>
+
+namespace YAML { class Node; }
+
+namespace lanemap::bev {
+
+struct BevBuilderOptions {
+  ProjectorOptions projector;
+  AccumulatorOptions accumulator;
+  ground::SweepGroundOptions ground;
+  bool use_lidar = true;           // false: flat ground only
+  bool async_mesh = true;          // build meshes in a worker thread
+  double max_mesh_age_s = 0.5;     // a frame uses a mesh at most this far from its time
+  double pose_keep_s = 10.0;       // pose history
+  double max_pose_gap_s = 0.25;    // two poses further apart do not interpolate
+  size_t max_pending_frames = 30;  // frames waiting for a later pose (3 s at 10 Hz)
+  double close_delay_s = 0.3;      // a closed road is handed over when poses are this far past it
+  Eigen::Isometry3d lidar_to_vehicle = Eigen::Isometry3d::Identity();
+
+  // From config/bev_builder.yaml's keys (all optional; see that file). Throws std::runtime_error
+  // naming a bad value.
+  static BevBuilderOptions fromYaml(const YAML::Node& node);
+};
+
+struct BevBuilderStats {
+  int64_t frames_received = 0, frames_projected = 0, frames_mesh = 0, frames_flat = 0;
+  int64_t frames_decode_error = 0, frames_wrong_size = 0, frames_unknown_class = 0;
+  int64_t frames_out_of_order = 0, frames_late = 0, frames_no_pose = 0, frames_queue_full = 0;
+  int64_t poses_received = 0, poses_invalid = 0, poses_out_of_order = 0;
+  int64_t sweeps_received = 0, sweeps_meshed = 0, sweeps_no_pose = 0, sweeps_replaced = 0, sweeps_empty = 0;
+  int64_t roads_opened = 0, roads_closed = 0, roads_discarded = 0, events_unknown_road = 0;
+  double project_ms_max = 0.0, project_ms_sum = 0.0;  // per projected frame
+  double mesh_ms_max = 0.0, mesh_ms_sum = 0.0;        // per mesh (extraction + Delaunay + index)
+};
+
+// Label image of label_image_t: raw (one byte per pixel, row-major) or PNG.
+enum class LabelEncoding : int8_t { kRaw = 0, kPng = 1 };
+// Decodes into a CV_8UC1 of width x height; false when the data does not decode to that.
+bool decodeLabelImage(LabelEncoding encoding, const uint8_t* data, size_t size, int width, int height, cv::Mat* out);
+
+struct SweepData {
+  int64_t utime = 0;
+  std::vector<int64_t> packet_utime;
+  std::vector<std::vector<uint8_t>> packets;
+};
+
+class BevBuilder {
+ public:
+  // The skeleton must outlive the builder.
+  BevBuilder(const skeleton::Skeleton& skeleton, const camera::CameraModel& camera, BevBuilderOptions options);
+  ~BevBuilder();
+  BevBuilder(const BevBuilder&) = delete;
+  BevBuilder& operator=(const BevBuilder&) = delete;
+
+  void addPose(const TimedPose& pose);
+  // A decoded label image (size and classes are checked here).
+  void addFrame(int64_t utime, const cv::Mat& labels);
+  // A label image as it comes in a message; counts decode errors.
+  void addEncodedFrame(int64_t utime, LabelEncoding encoding, const std::vector<uint8_t>& data, int width, int height);
+  void addSweep(SweepData sweep);
+  void roadEntered(int64_t road_id, int64_t utime);
+  void roadClosed(int64_t road_id, int64_t utime);
+  void roadsAbandoned(int64_t utime);
+  // End of input: waits for the mesh worker, hands over roads that are closing.
+  void finish();
+
+  std::vector<RoadBev> takeClosed();
+  BevBuilderStats stats() const;
+  const Projector& projector() const { return projector_; }
+  const RoadBevAccumulator& accumulator() const { return accumulator_; }
+  std::shared_ptr<const ground::SweepGround> latestMesh() const;
+
+ private:
+  struct PendingFrame {
+    int64_t utime;
+    cv::Mat labels;
+  };
+  void drainFrames();
+  void project(int64_t utime, const cv::Mat& labels, const Eigen::Isometry3d& pose);
+  void tryPendingSweep();
+  void buildMesh(const ground::SweepPoints& points);
+  void workerLoop();
+  void finishCloses(bool all);
+
+  const skeleton::Skeleton& skeleton_;
+  BevBuilderOptions options_;
+  Projector projector_;
+  RoadBevAccumulator accumulator_;
+  PoseBuffer poses_;
+  std::deque<PendingFrame> pending_;
+  int64_t last_frame_utime_ = 0;
+  std::optional<SweepData> pending_sweep_;
+  std::map<int64_t, int64_t> closing_;  // road id -> close utime
+  std::vector<RoadBev> closed_;
+
+  mutable std::mutex mutex_;  // guards stats_ mesh fields, mesh_, work_
+  std::condition_variable cv_;
+  BevBuilderStats stats_;
+  std::shared_ptr<const ground::SweepGround> mesh_;
+  std::optional<ground::SweepPoints> work_;
+  bool working_ = false, stop_ = false;
+  std::thread worker_;
+};
+
+}  // namespace lanemap::bev

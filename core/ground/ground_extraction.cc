@@ -1,0 +1,118 @@
+// extractGround: the one translation unit that includes PCL (its headers are slow to compile).
+#include "core/ground/ground_extraction.h"
+
+#include <pcl/console/print.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/sample_consensus/ransac.h>
+#include <pcl/sample_consensus/sac_model_perpendicular_plane.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace lanemap::ground {
+
+namespace {
+
+struct Plane {
+  Eigen::Vector4d c = Eigen::Vector4d(0.0, 0.0, 1.0, 0.0);  // a x + b y + c z + d = 0, c > 0
+  double zAt(double x, double y) const { return -(c[0] * x + c[1] * y + c[3]) / c[2]; }
+};
+
+// Fits a near-horizontal plane to `cloud` (PCL RANSAC); returns its inliers (indices into cloud).
+bool fitPlane(const pcl::PointCloud<pcl::PointXYZ>::Ptr& cloud, const GroundExtractionOptions& o, Plane& plane,
+              pcl::Indices& inliers) {
+  auto model = std::make_shared<pcl::SampleConsensusModelPerpendicularPlane<pcl::PointXYZ>>(cloud);
+  model->setAxis(Eigen::Vector3f::UnitZ());
+  model->setEpsAngle(o.max_tilt_deg * M_PI / 180.0);
+  pcl::RandomSampleConsensus<pcl::PointXYZ> ransac(model, o.distance_threshold_m);
+  ransac.setMaxIterations(o.max_iterations);
+  if (!ransac.computeModel()) return false;
+  ransac.getInliers(inliers);
+  Eigen::VectorXf coeff;
+  ransac.getModelCoefficients(coeff);
+  if (coeff.size() != 4 || static_cast<int>(inliers.size()) < std::max(3, o.min_points / 2)) return false;
+  Eigen::Vector4d c = coeff.cast<double>();
+  if (c[2] < 0) c = -c;
+  if (c[2] < 1e-3) return false;
+  plane.c = c / c.head<3>().norm();
+  return true;
+}
+
+// One azimuth sector: range bins from the car outwards, each predicted by the previous plane.
+void sectorGround(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::vector<int>>& bins,
+                  const GroundExtractionOptions& o, std::vector<int>& ground) {
+  Plane plane;  // the vehicle's ground plane
+  double ref_range = 0.0;
+  for (size_t b = 0; b < bins.size(); ++b) {
+    const double far = o.range_edges_m[b + 1];
+    const double band = o.band_base_m + o.band_slope * (far - ref_range);
+    auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+    std::vector<int> ids;
+    for (int i : bins[b]) {
+      const auto& p = pts[i];
+      if (std::abs(p.z() - plane.zAt(p.x(), p.y())) > band) continue;
+      cloud->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())));
+      ids.push_back(i);
+    }
+    if (static_cast<int>(ids.size()) < o.min_points) continue;
+    pcl::Indices inliers;
+    if (!fitPlane(cloud, o, plane, inliers)) continue;
+    for (int k : inliers) ground.push_back(ids[k]);
+    ref_range = 0.5 * (o.range_edges_m[b] + far);
+  }
+}
+
+// Marks the points on vertical structures (see the header).
+std::vector<uint8_t> verticalStructures(const std::vector<Eigen::Vector3d>& pts, const GroundExtractionOptions& o) {
+  const int slices = std::max(1, static_cast<int>(std::lround(360.0 / o.azimuth_slice_deg)));
+  std::vector<std::vector<std::pair<double, int>>> by_slice(slices);
+  for (size_t i = 0; i < pts.size(); ++i) {
+    if (!pts[i].allFinite()) continue;
+    const double az = std::atan2(pts[i].y(), pts[i].x()) + M_PI;
+    const int s = std::min(slices - 1, static_cast<int>(az / (2.0 * M_PI) * slices));
+    by_slice[s].emplace_back(std::hypot(pts[i].x(), pts[i].y()), static_cast<int>(i));
+  }
+  std::vector<uint8_t> vertical(pts.size(), 0);
+  for (auto& slice : by_slice) {
+    std::sort(slice.begin(), slice.end());
+    for (size_t k = 0; k + 1 < slice.size(); ++k) {
+      const double dz = std::abs(pts[slice[k + 1].second].z() - pts[slice[k].second].z());
+      const double dr = slice[k + 1].first - slice[k].first;
+      if (dz > o.vertical_step_m && dz > o.vertical_slope * dr) vertical[slice[k].second] = vertical[slice[k + 1].second] = 1;
+    }
+  }
+  return vertical;
+}
+
+}  // namespace
+
+std::vector<int> extractGround(const std::vector<Eigen::Vector3d>& points, const GroundExtractionOptions& o) {
+  // A bin without a plane is normal (a wall, an empty sector); PCL would print a warning for each.
+  static const bool quiet = [] {
+    pcl::console::setVerbosityLevel(pcl::console::L_ERROR);
+    return true;
+  }();
+  (void)quiet;
+  const int nbins = static_cast<int>(o.range_edges_m.size()) - 1;
+  if (nbins < 1 || o.sectors < 1) return {};
+  std::vector<std::vector<std::vector<int>>> cells(o.sectors, std::vector<std::vector<int>>(nbins));
+  const std::vector<uint8_t> vertical = verticalStructures(points, o);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const auto& p = points[i];
+    if (!p.allFinite() || vertical[i]) continue;
+    const double r = std::hypot(p.x(), p.y());
+    const auto it = std::upper_bound(o.range_edges_m.begin(), o.range_edges_m.end(), r);
+    if (it == o.range_edges_m.begin() || it == o.range_edges_m.end()) continue;
+    const int bin = static_cast<int>(it - o.range_edges_m.begin()) - 1;
+    const double az = std::atan2(p.y(), p.x()) + M_PI;  // [0, 2 pi]
+    const int sector = std::min(o.sectors - 1, static_cast<int>(az / (2.0 * M_PI) * o.sectors));
+    cells[sector][bin].push_back(static_cast<int>(i));
+  }
+  std::vector<int> ground;
+  for (const auto& sector : cells) sectorGround(points, sector, o, ground);
+  std::sort(ground.begin(), ground.end());
+  return ground;
+}
+
+}  // namespace lanemap::ground

@@ -1,0 +1,220 @@
+// lanemap-bev-builder: SEMANTIC_FRONT (or SEMANTIC_FRONT_TRUTH), LIDAR_PACKETS, POSE and ROAD_EVENT
+// in; one BEV grid per closed atomic road out, written atomically to <store>/bev/road_<id>.bev and
+// announced on BEV_ROAD (METHOD.md section 3). A thin wrapper over core/bev/bev_builder.h; the mesh
+// of each LIDAR sweep is built in core's worker thread so LCM handling never waits for it, a frame
+// projection runs inline (tools/bench/bev_bench.cc: ~10-20 ms). Counters in STATUS; handler times
+// in its latency percentiles.
+//
+//   lanemap-bev-builder --config config/bev_builder.yaml [--osm FILE] [--store DIR] [--vehicle FILE]
+//                       [--semantic-channel SEMANTIC_FRONT_TRUTH] [--no-lidar]
+#include "core/bev/bev_builder.h"
+#include "core/bev/bev_store.h"
+#include "core/camera/camera_model.h"
+#include "core/osm/osm_data.h"
+#include "core/skeleton/skeleton.h"
+#include "lanemap/bev_road_t.hpp"
+#include "lanemap/label_image_t.hpp"
+#include "lanemap/lidar_packets_t.hpp"
+#include "lanemap/pose_t.hpp"
+#include "lanemap/road_event_t.hpp"
+#include "processes/framework/channels.h"
+#include "processes/framework/process.h"
+
+#include <chrono>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <string>
+
+namespace {
+
+using namespace lanemap;
+
+template <typename T>
+void read(const YAML::Node& node, const char* key, T& value) {
+  if (node && node[key]) value = node[key].as<T>();
+}
+
+class BevBuilderApp {
+ public:
+  BevBuilderApp(Process& process, std::unique_ptr<skeleton::Skeleton> skeleton, const camera::CameraModel& camera,
+                const bev::BevBuilderOptions& options, std::string store)
+      : process_(process), skeleton_(std::move(skeleton)), builder_(*skeleton_, camera, options), store_(std::move(store)) {}
+
+  void subscribe(const std::string& semantic_channel, const YAML::Node& queues) {
+    int q_pose = 1000, q_sem = 30, q_lidar = 10, q_event = 100;
+    read(queues, "pose", q_pose);
+    read(queues, "semantic", q_sem);
+    read(queues, "lidar", q_lidar);
+    read(queues, "road_event", q_event);
+    auto& lcm = process_.lcm();
+    lcm.subscribe(channels::kPose, &BevBuilderApp::onPose, this)->setQueueCapacity(q_pose);
+    lcm.subscribe(semantic_channel, &BevBuilderApp::onLabels, this)->setQueueCapacity(q_sem);
+    lcm.subscribe(channels::kLidarPackets, &BevBuilderApp::onLidar, this)->setQueueCapacity(q_lidar);
+    lcm.subscribe(channels::kRoadEvent, &BevBuilderApp::onRoadEvent, this)->setQueueCapacity(q_event);
+  }
+
+  // After spin(): roads that were closing are handed over too.
+  void finish() {
+    builder_.finish();
+    writeClosed();
+    updateCounters();
+  }
+
+ private:
+  void onPose(const lcm::ReceiveBuffer*, const std::string&, const pose_t* m) {
+    bev::TimedPose p;
+    p.utime = m->utime;
+    const bool valid = m->status != pose_t::STATUS_INVALID;
+    p.position = valid ? skeleton_->frame().toEnu(m->latitude, m->longitude, m->altitude)
+                       : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    p.orientation = Eigen::Quaterniond(m->orientation[0], m->orientation[1], m->orientation[2], m->orientation[3]);
+    builder_.addPose(p);
+    afterMessage();
+  }
+
+  void onLabels(const lcm::ReceiveBuffer*, const std::string&, const label_image_t* m) {
+    const auto t0 = std::chrono::steady_clock::now();
+    builder_.addEncodedFrame(m->utime, static_cast<bev::LabelEncoding>(m->encoding), m->data, m->width, m->height);
+    process_.latency().add(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    afterMessage();
+  }
+
+  void onLidar(const lcm::ReceiveBuffer*, const std::string&, const lidar_packets_t* m) {
+    bev::SweepData s;
+    s.utime = m->utime;
+    s.packet_utime = m->packet_utime;
+    s.packets = m->data;
+    builder_.addSweep(std::move(s));
+    afterMessage();
+  }
+
+  void onRoadEvent(const lcm::ReceiveBuffer*, const std::string&, const road_event_t* m) {
+    switch (m->type) {
+      case road_event_t::TYPE_ENTERED_ROAD: builder_.roadEntered(m->road_id, m->utime); break;
+      case road_event_t::TYPE_REACHED_INTERSECTION: builder_.roadClosed(m->road_id, m->utime); break;
+      case road_event_t::TYPE_LEFT_MAP:
+      case road_event_t::TYPE_POSE_LOST: builder_.roadsAbandoned(m->utime); break;
+      default: break;
+    }
+    afterMessage();
+  }
+
+  void afterMessage() {
+    writeClosed();
+    updateCounters();  // a struct copy and ~30 map writes: cheap at ~250 messages/s
+  }
+
+  void writeClosed() {
+    for (auto& road : builder_.takeClosed()) {
+      try {
+        const auto stored = bev::storeRoad(store_, road);
+        publish(road, stored);
+        process_.counters().add("roads_written");
+      } catch (const std::exception& e) {
+        std::cerr << "bev_builder: road " << road.road_id << ": " << e.what() << "\n";
+        process_.counters().add("roads_write_failed");
+      }
+    }
+  }
+
+  void publish(const bev::RoadBev& road, const bev::StoredRoad& stored) {
+    bev_road_t msg;
+    msg.utime = road.closed_utime;
+    msg.road_id = road.road_id;
+    msg.from_node = road.from_node;
+    msg.to_node = road.to_node;
+    msg.path = stored.path;
+    msg.origin_east = stored.origin.x();
+    msg.origin_north = stored.origin.y();
+    msg.resolution_m = stored.resolution;
+    msg.width = stored.width;
+    msg.height = stored.height;
+    msg.num_frames = stored.frames;
+    process_.lcm().publish(channels::kBevRoad, &msg);
+  }
+
+  void updateCounters() {
+    const auto s = builder_.stats();
+    auto& c = process_.counters();
+    c.set("frames_received", s.frames_received);
+    c.set("frames_projected", s.frames_projected);
+    c.set("frames_mesh", s.frames_mesh);
+    c.set("frames_flat", s.frames_flat);
+    c.set("frames_decode_error", s.frames_decode_error);
+    c.set("frames_wrong_size", s.frames_wrong_size);
+    c.set("frames_unknown_class", s.frames_unknown_class);
+    c.set("frames_out_of_order", s.frames_out_of_order);
+    c.set("frames_late", s.frames_late);
+    c.set("frames_no_pose", s.frames_no_pose);
+    c.set("frames_queue_full", s.frames_queue_full);
+    c.set("poses_received", s.poses_received);
+    c.set("poses_invalid", s.poses_invalid);
+    c.set("poses_out_of_order", s.poses_out_of_order);
+    c.set("sweeps_received", s.sweeps_received);
+    c.set("sweeps_meshed", s.sweeps_meshed);
+    c.set("sweeps_no_pose", s.sweeps_no_pose);
+    c.set("sweeps_replaced", s.sweeps_replaced);
+    c.set("roads_opened", s.roads_opened);
+    c.set("roads_closed", s.roads_closed);
+    c.set("roads_discarded", s.roads_discarded);
+    c.set("events_unknown_road", s.events_unknown_road);
+    c.set("project_us_max", static_cast<int64_t>(s.project_ms_max * 1e3));
+    c.set("project_us_mean", s.frames_projected ? static_cast<int64_t>(s.project_ms_sum * 1e3 / s.frames_projected) : 0);
+    c.set("mesh_us_max", static_cast<int64_t>(s.mesh_ms_max * 1e3));
+    c.set("mesh_us_mean", s.sweeps_meshed ? static_cast<int64_t>(s.mesh_ms_sum * 1e3 / s.sweeps_meshed) : 0);
+    c.set("active_roads", static_cast<int64_t>(builder_.accumulator().activeRoads().size()));
+  }
+
+  Process& process_;
+  std::unique_ptr<skeleton::Skeleton> skeleton_;
+  bev::BevBuilder builder_;
+  std::string store_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Process process("bev_builder");
+  std::string osm_flag, store_flag, channel_flag, vehicle_flag;
+  bool no_lidar = false;
+  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: config osm)");
+  process.cli().add_option("--store", store_flag, "map store folder (default: config store)");
+  process.cli().add_option("--semantic-channel", channel_flag, "semantic channel (default: config semantic_channel)");
+  process.cli().add_option("--vehicle", vehicle_flag, "vehicle YAML: camera, lidar mount (default: config vehicle)");
+  process.cli().add_flag("--no-lidar", no_lidar, "flat ground only");
+  if (int rc = process.init(argc, argv); rc >= 0) return rc;
+  try {
+    const YAML::Node& config = process.config();
+    std::string osm = osm_flag, store = store_flag, channel = channel_flag, vehicle = "config/vehicle.yaml";
+    if (osm.empty()) read(config, "osm", osm);
+    if (store.empty()) read(config, "store", store);
+    if (channel.empty()) channel = channels::kSemanticFront;
+    if (channel_flag.empty()) read(config, "semantic_channel", channel);
+    read(config, "vehicle", vehicle);
+    if (!vehicle_flag.empty()) vehicle = vehicle_flag;
+    if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the config");
+    if (store.empty()) throw std::runtime_error("no map store: give --store or `store:` in the config");
+    skeleton::SkeletonOptions sk_options;
+    read(config, "junction_merge_radius_m", sk_options.junction_merge_radius_m);
+    if (config["origin"]) {
+      sk_options.origin = geo::LatLonAlt{config["origin"]["lat"].as<double>(), config["origin"]["lon"].as<double>(), 0.0};
+    }
+    auto sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(osm::readOsm(osm), sk_options));
+    const YAML::Node veh = loadYamlFile(vehicle);
+    const auto camera = camera::CameraModel::fromYaml(veh["camera"]);
+    bev::BevBuilderOptions options = bev::BevBuilderOptions::fromYaml(config);
+    if (no_lidar) options.use_lidar = false;
+    if (options.use_lidar) options.lidar_to_vehicle = camera::mountFromYaml(veh["lidar"]["mount"], vehicle + ": lidar.mount");
+    std::cerr << "bev_builder: " << sk->roads().size() << " atomic roads from " << osm << ", " << channel
+              << (options.use_lidar ? " + LIDAR mesh" : " (flat ground)") << ", store " << store << "\n";
+    BevBuilderApp app(process, std::move(sk), camera, options, store);
+    app.subscribe(channel, config["queue_capacity"]);
+    const int rc = process.spin();
+    app.finish();
+    return rc;
+  } catch (const std::exception& e) {
+    std::cerr << "bev_builder: " << e.what() << "\n";
+    return 2;
+  }
+}

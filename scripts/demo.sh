@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# make demo: simulate a drive over the bundled West Oakland street network and write the
-# ground-truth lane map with a picture. Usage: scripts/demo.sh BUILD_DIR OUT_DIR
+# make demo: simulate a drive over the bundled West Oakland street network, map it with the
+# offline runner (road tracker -> BEV on the LIDAR mesh -> lane exploration -> intersections) on
+# the simulator's truth labels, and score the map against the ground truth.
+# Usage: scripts/demo.sh BUILD_DIR OUT_DIR
 set -euo pipefail
 build=${1:-build}
 out=${2:-demo-out}
@@ -18,6 +20,12 @@ echo "== simulating a 60 s drive (seed 1)"
 echo "== what the log holds"
 "$bin/lanemap-lcm-stats" --log "$out/drive/drive.lcmlog"
 
+echo "== mapping the drive (lanemap-offline, oracle labels SEMANTIC_FRONT_TRUTH)"
+"$bin/lanemap-offline" --log "$out/drive/drive.lcmlog" --osm "$out/drive/roads.osm" --out "$out/map"
+
+echo "== scores on the roads the drive mapped (lanemap-eval --mapped-roads-only)"
+"$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/map/map.osm" --mapped-roads-only --json "$out/map/eval.json"
+
 cat <<EOT
 
 Demo output in $out/:
@@ -27,5 +35,7 @@ Demo output in $out/:
   drive/groundtruth.png             a picture of it over the street network
   drive/roads.osm                   the road-level OSM the mapper is given
   drive/scenario.json               route, seed, options, counts
+  map/map.osm, map.geojson, map.png the lane map built from the drive (Lanelet2, GeoJSON, picture)
+  map/eval.json                     its scores against drive/groundtruth.osm
 Map data (c) OpenStreetMap contributors, ODbL.
 EOT

@@ -90,7 +90,7 @@ std::vector<uint8_t> verticalStructures(const std::vector<Eigen::Vector3d>& pts,
 std::vector<int> extractGround(const std::vector<Eigen::Vector3d>& points, const GroundExtractionOptions& o) {
   // A bin without a plane is normal (a wall, an empty sector); PCL would print a warning for each.
   static const bool quiet = [] {
-    pcl::console::setVerbosityLevel(pcl::console::L_ERROR);
+    pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);  // "no model" is reported as an error
     return true;
   }();
   (void)quiet;

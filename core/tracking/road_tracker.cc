@@ -476,4 +476,35 @@ void RoadTracker::interpolateCrossing(RoadEvent& e, int64_t road, double s_cross
   e.position = prev_position_ + f * (e.position - prev_position_);
 }
 
+namespace {
+
+template <typename T>
+void readKey(const YAML::Node& node, const char* key, T& value) {
+  if (node && node[key]) value = node[key].as<T>();
+}
+
+}  // namespace
+
+RoadTrackerConfig RoadTrackerConfig::fromYaml(const YAML::Node& n) {
+  RoadTrackerConfig c;
+  readKey(n, "measurement_sigma_m", c.measurement_sigma_m);
+  readKey(n, "acceleration_sigma", c.acceleration_sigma);
+  readKey(n, "acquire_distance_m", c.acquire_distance_m);
+  readKey(n, "acquire_heading_rad", c.acquire_heading_rad);
+  readKey(n, "exit_distance_m", c.exit_distance_m);
+  readKey(n, "exit_heading_rad", c.exit_heading_rad);
+  readKey(n, "u_turn_heading_rad", c.u_turn_heading_rad);
+  readKey(n, "exit_ambiguity_m", c.exit_ambiguity_m);
+  readKey(n, "exit_commit_m", c.exit_commit_m);
+  readKey(n, "switch_margin_m", c.switch_margin_m);
+  readKey(n, "switch_time_s", c.switch_time_s);
+  readKey(n, "left_map_distance_m", c.left_map_distance_m);
+  readKey(n, "left_map_time_s", c.left_map_time_s);
+  readKey(n, "wrong_way_heading_rad", c.wrong_way_heading_rad);
+  readKey(n, "wrong_way_time_s", c.wrong_way_time_s);
+  readKey(n, "pose_gap_s", c.pose_gap_s);
+  readKey(n, "max_innovation_m", c.max_innovation_m);
+  return c;
+}
+
 }  // namespace lanemap::tracking

@@ -14,6 +14,8 @@
 
 #include "core/skeleton/skeleton.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <Eigen/Core>
 
 #include <cstdint>
@@ -75,6 +77,9 @@ struct RoadTrackerConfig {
   double wrong_way_time_s = 0.5;       // ... for this long (and two poses) -> wrong way
   double pose_gap_s = 1.0;             // no valid pose for longer -> pose lost
   double max_innovation_m = 30.0;      // a jump larger than this restarts the filter
+
+  // The keys present in `node` (config/road_tracker.yaml `tracker:`), defaults for the others.
+  static RoadTrackerConfig fromYaml(const YAML::Node& node);
 };
 
 class RoadTracker {

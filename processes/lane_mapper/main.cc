@@ -8,6 +8,7 @@
 #include "core/bev/bev_grid.h"
 #include "core/io/lanelet2.h"
 #include "core/lanes/explorer.h"
+#include "core/mapping/map_assembler.h"
 #include "core/skeleton/skeleton.h"
 #include "lanemap/bev_road_t.hpp"
 #include "lanemap/lane_map_t.hpp"
@@ -62,8 +63,10 @@ polyline_t toPolyline(const std::vector<Eigen::Vector3d>& pts, int8_t type) {
 class LaneMapperApp {
  public:
   LaneMapperApp(Process& process, std::unique_ptr<skeleton::Skeleton> sk, lanes::ExplorerOptions options,
-                std::string store, const std::string& channel, int queue)
-      : process_(process), sk_(std::move(sk)), options_(options), store_(std::move(store)) {
+                std::string store, const std::string& channel, int queue,
+                intersections::IntersectionOptions intersection_options, std::vector<osm::Restriction> restrictions)
+      : process_(process), sk_(std::move(sk)), options_(options), store_(std::move(store)),
+        intersection_options_(std::move(intersection_options)), restrictions_(std::move(restrictions)) {
     fs::create_directories(fs::path(store_) / "lanes");
     reloadStore();
     worker_ = std::thread([this] { work(); });
@@ -134,16 +137,11 @@ class LaneMapperApp {
   std::string roadFile(int64_t id) const { return (fs::path(store_) / "lanes" / ("road_" + std::to_string(id) + ".osm")).string(); }
   std::string wholeMapFile() const { return (fs::path(store_) / "lane_map.osm").string(); }
 
+  // Roads plus the intersections between them (core/mapping, as the offline runner does).
   void writeWholeMap() {
-    map::LaneMap all;
-    const auto& o = sk_->frame().origin();
-    all.origin_lat = o.lat;
-    all.origin_lon = o.lon;
-    all.origin_alt = o.alt;
-    for (const auto& [id, m] : roads_) {
-      all.lines.insert(all.lines.end(), m.lines.begin(), m.lines.end());
-      all.lanelets.insert(all.lanelets.end(), m.lanelets.begin(), m.lanelets.end());
-    }
+    mapping::MapAssembler assembler(*sk_, intersection_options_, restrictions_);
+    for (const auto& [id, m] : roads_) assembler.setRoad(id, m);
+    const map::LaneMap all = assembler.map();
     if (!all.lanelets.empty()) io::writeLanelet2(all, wholeMapFile());
   }
 
@@ -203,6 +201,8 @@ class LaneMapperApp {
   std::deque<bev_road_t> jobs_;
   bool stop_ = false;
   std::map<int64_t, map::LaneMap> roads_;
+  intersections::IntersectionOptions intersection_options_;
+  std::vector<osm::Restriction> restrictions_;
   std::thread worker_;
 };
 
@@ -226,15 +226,17 @@ int main(int argc, char** argv) {
     if (config["origin"]) {
       options.origin = lanemap::geo::LatLonAlt{config["origin"]["lat"].as<double>(), config["origin"]["lon"].as<double>(), 0.0};
     }
-    auto sk = std::make_unique<lanemap::skeleton::Skeleton>(
-        lanemap::skeleton::Skeleton::build(lanemap::osm::readOsm(osm), options));
+    const lanemap::osm::OsmData osm_data = lanemap::osm::readOsm(osm);
+    auto sk = std::make_unique<lanemap::skeleton::Skeleton>(lanemap::skeleton::Skeleton::build(osm_data, options));
+    const auto intersection_options = lanemap::intersections::IntersectionOptions::fromYaml(config["intersections"]);
     const auto explorer = lanemap::lanes::ExplorerOptions::fromYaml(config["explorer"]);
     std::string channel = lanemap::channels::kBevRoad;
     int queue = 100;
     read(config, "bev_channel", channel);
     read(config, "queue_capacity", queue);
     std::cerr << "lane_mapper: " << sk->roads().size() << " atomic roads from " << osm << ", store " << store << "\n";
-    LaneMapperApp app(process, std::move(sk), explorer, store, channel, queue);
+    LaneMapperApp app(process, std::move(sk), explorer, store, channel, queue, intersection_options,
+                      osm_data.restrictions);
     return process.spin();
   } catch (const std::exception& e) {
     std::cerr << "lane_mapper: " << e.what() << "\n";

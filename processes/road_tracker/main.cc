@@ -24,28 +24,6 @@ void read(const YAML::Node& node, const char* key, T& value) {
   if (node && node[key]) value = node[key].as<T>();
 }
 
-RoadTrackerConfig trackerConfig(const YAML::Node& n) {
-  RoadTrackerConfig c;
-  read(n, "measurement_sigma_m", c.measurement_sigma_m);
-  read(n, "acceleration_sigma", c.acceleration_sigma);
-  read(n, "acquire_distance_m", c.acquire_distance_m);
-  read(n, "acquire_heading_rad", c.acquire_heading_rad);
-  read(n, "exit_distance_m", c.exit_distance_m);
-  read(n, "exit_heading_rad", c.exit_heading_rad);
-  read(n, "u_turn_heading_rad", c.u_turn_heading_rad);
-  read(n, "exit_ambiguity_m", c.exit_ambiguity_m);
-  read(n, "exit_commit_m", c.exit_commit_m);
-  read(n, "switch_margin_m", c.switch_margin_m);
-  read(n, "switch_time_s", c.switch_time_s);
-  read(n, "left_map_distance_m", c.left_map_distance_m);
-  read(n, "left_map_time_s", c.left_map_time_s);
-  read(n, "wrong_way_heading_rad", c.wrong_way_heading_rad);
-  read(n, "wrong_way_time_s", c.wrong_way_time_s);
-  read(n, "pose_gap_s", c.pose_gap_s);
-  read(n, "max_innovation_m", c.max_innovation_m);
-  return c;
-}
-
 class RoadTrackerApp {
  public:
   RoadTrackerApp(lanemap::Process& process, std::unique_ptr<lanemap::skeleton::Skeleton> skeleton,
@@ -131,7 +109,7 @@ int main(int argc, char** argv) {
     read(config, "queue_capacity", queue);
     std::cerr << "road_tracker: " << skeleton->roads().size() << " atomic roads, "
               << skeleton->intersections().size() << " intersections from " << osm << "\n";
-    RoadTrackerApp app(process, std::move(skeleton), trackerConfig(config["tracker"]), pose_channel, queue);
+    RoadTrackerApp app(process, std::move(skeleton), RoadTrackerConfig::fromYaml(config["tracker"]), pose_channel, queue);
     return process.spin();
   } catch (const std::exception& e) {
     std::cerr << "road_tracker: " << e.what() << "\n";

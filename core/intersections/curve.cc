@@ -1,0 +1,115 @@
+// Connection curves of intersection lanelets (see curve.h).
+#include "core/intersections/curve.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lanemap::intersections {
+
+namespace {
+
+using Eigen::Vector2d;
+
+constexpr double kPi = 3.14159265358979323846;
+
+double cross(const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+Vector2d unit(const Vector2d& v, const Vector2d& fallback) {
+  const double n = v.norm();
+  return n > 1e-12 ? Vector2d(v / n) : fallback;
+}
+
+bool segmentsCross(const Vector2d& a, const Vector2d& b, const Vector2d& c, const Vector2d& d) {
+  const double d1 = cross(b - a, c - a), d2 = cross(b - a, d - a);
+  const double d3 = cross(d - c, a - c), d4 = cross(d - c, b - c);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return true;
+  const auto on = [](const Vector2d& p, const Vector2d& q, const Vector2d& r, double o) {
+    return std::abs(o) < 1e-12 && std::min(p.x(), q.x()) - 1e-12 <= r.x() && r.x() <= std::max(p.x(), q.x()) + 1e-12 &&
+           std::min(p.y(), q.y()) - 1e-12 <= r.y() && r.y() <= std::max(p.y(), q.y()) + 1e-12;
+  };
+  return on(a, b, c, d1) || on(a, b, d, d2) || on(c, d, a, d3) || on(c, d, b, d4);
+}
+
+}  // namespace
+
+Vector2d ConnectionCurve::point(double a) const {
+  const double b = 1.0 - a;
+  if (quadratic) return b * b * control[0] + 2.0 * a * b * control[1] + a * a * control[2];
+  return b * b * b * control[0] + 3.0 * b * b * a * control[1] + 3.0 * b * a * a * control[2] + a * a * a * control[3];
+}
+
+Vector2d ConnectionCurve::derivative(double a) const {
+  const double b = 1.0 - a;
+  if (quadratic) return 2.0 * b * (control[1] - control[0]) + 2.0 * a * (control[2] - control[1]);
+  return 3.0 * b * b * (control[1] - control[0]) + 6.0 * a * b * (control[2] - control[1]) +
+         3.0 * a * a * (control[3] - control[2]);
+}
+
+std::vector<Vector2d> ConnectionCurve::sample(double step_m) const {
+  double polygon = 0.0;  // control polygon length: an upper bound of the curve length
+  for (size_t i = 1; i < control.size(); ++i) polygon += (control[i] - control[i - 1]).norm();
+  const double approx = 0.5 * (polygon + (control.back() - control.front()).norm());
+  int n = std::max(5, static_cast<int>(std::ceil(approx / std::max(1e-3, step_m))) + 1);
+  if (n % 2 == 0) ++n;
+  std::vector<Vector2d> out(n);
+  for (int i = 0; i < n; ++i) out[i] = point(static_cast<double>(i) / (n - 1));
+  out.front() = control.front();
+  out.back() = control.back();
+  return out;
+}
+
+ConnectionCurve connectionCurve(const Vector2d& p0, const Vector2d& t0_in, const Vector2d& p2,
+                                const Vector2d& t2_in, const CurveOptions& o) {
+  const Vector2d t0 = unit(t0_in, unit(p2 - p0, Vector2d::UnitX()));
+  const Vector2d t2 = unit(t2_in, t0);
+  const double chord = (p2 - p0).norm();
+  ConnectionCurve c;
+  // Tangent lines p0 + a t0 and p2 - b t2 meet where a t0 + b t2 = p2 - p0.
+  const double det = cross(t0, t2);
+  if (std::abs(det) > std::sin(o.parallel_deg * kPi / 180.0) && chord > 1e-6) {
+    const Vector2d r = p2 - p0;
+    const double a = cross(r, t2) / det;
+    const double b = cross(t0, r) / det;
+    if (a > o.min_control_fraction * chord && b > o.min_control_fraction * chord &&
+        a < o.max_control_fraction * chord && b < o.max_control_fraction * chord) {
+      c.quadratic = true;
+      c.control = {p0, p0 + a * t0, p2};
+      return c;
+    }
+  }
+  const double h = o.cubic_handle_fraction * chord;
+  c.control = {p0, p0 + h * t0, p2 - h * t2, p2};
+  return c;
+}
+
+std::vector<Vector2d> offsetPolyline(const std::vector<Vector2d>& pts, const std::vector<double>& d) {
+  std::vector<Vector2d> out(pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const size_t a = i == 0 ? 0 : i - 1;
+    const size_t b = std::min(i + 1, pts.size() - 1);
+    const Vector2d t = unit(pts[b] - pts[a], Vector2d::UnitX());
+    out[i] = pts[i] + d[i] * Vector2d(-t.y(), t.x());
+  }
+  return out;
+}
+
+double headingChange(const Vector2d& t_in, const Vector2d& t_out) {
+  return std::atan2(cross(t_in, t_out), t_in.dot(t_out));
+}
+
+map::TurnDirection turnDirection(const Vector2d& t_in, const Vector2d& t_out, double straight_max_deg) {
+  const double ang = headingChange(t_in, t_out);
+  if (std::abs(ang) < straight_max_deg * kPi / 180.0) return map::TurnDirection::kStraight;
+  return ang > 0 ? map::TurnDirection::kLeft : map::TurnDirection::kRight;
+}
+
+bool selfIntersects(const std::vector<Vector2d>& pts) {
+  for (size_t i = 0; i + 1 < pts.size(); ++i) {
+    for (size_t j = i + 2; j + 1 < pts.size(); ++j) {
+      if (segmentsCross(pts[i], pts[i + 1], pts[j], pts[j + 1])) return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace lanemap::intersections

@@ -1,0 +1,58 @@
+// Plane geometry of intersection lanelets (METHOD.md section 5): the quadratic Bezier reference
+// trajectory through the tangent-intersection control point, its cubic fallback, offsets for the
+// lanelet's boundaries, and the turn direction from the heading change.
+//
+// Note: core/sim/world_geometry.h (sim::geom::connectionCurve) builds the simulator's ground-truth
+// connections with the same rule. It is duplicated here on purpose, small and with the curve's
+// control points exposed: core/intersections must not depend on the simulator, and moving the
+// shared code out of core/sim is the simulator owner's call (see the report of issue 6).
+#pragma once
+
+#include "core/map/lane_map.h"
+
+#include <Eigen/Core>
+
+#include <vector>
+
+namespace lanemap::intersections {
+
+struct CurveOptions {
+  // Below this angle between the two tangents they count as parallel: cubic fallback.
+  double parallel_deg = 10.0;
+  // The control point must lie in front of both ends by at least this fraction of the chord, and
+  // not farther than max_control_fraction chords (a far control point makes a loop or a kink).
+  double min_control_fraction = 0.05;
+  double max_control_fraction = 3.0;
+  double cubic_handle_fraction = 1.0 / 3.0;  // cubic fallback: handles along the tangents, * chord
+  double step_m = 0.5;                       // sampling density
+};
+
+// A connection from p0 (leaving with heading t0) to p2 (arriving with heading t2).
+struct ConnectionCurve {
+  bool quadratic = false;  // else the cubic fallback
+  // Control points: quadratic uses c[0] = P0, c[1] = P, c[2] = P2; cubic c[0..3].
+  std::vector<Eigen::Vector2d> control;
+  Eigen::Vector2d point(double a) const;      // a in [0, 1]
+  Eigen::Vector2d derivative(double a) const; // dB/da
+  // Samples at a = i / (n - 1), n odd and >= 5 so the middle sample is a = 1/2; ends exact.
+  std::vector<Eigen::Vector2d> sample(double step_m) const;
+};
+
+ConnectionCurve connectionCurve(const Eigen::Vector2d& p0, const Eigen::Vector2d& t0,
+                                const Eigen::Vector2d& p2, const Eigen::Vector2d& t2,
+                                const CurveOptions& options = {});
+
+// Offsets `pts` by d[i] along its left normals (from neighbouring points). Sizes must agree.
+std::vector<Eigen::Vector2d> offsetPolyline(const std::vector<Eigen::Vector2d>& pts,
+                                            const std::vector<double>& d);
+
+// Signed heading change from t_in to t_out in (-pi, pi], counter-clockwise positive (left).
+double headingChange(const Eigen::Vector2d& t_in, const Eigen::Vector2d& t_out);
+// kStraight when |change| < straight_max_deg, else kLeft (positive) or kRight.
+map::TurnDirection turnDirection(const Eigen::Vector2d& t_in, const Eigen::Vector2d& t_out,
+                                 double straight_max_deg = 40.0);
+
+// True when two segments of the polyline that are not neighbours cross or touch.
+bool selfIntersects(const std::vector<Eigen::Vector2d>& pts);
+
+}  // namespace lanemap::intersections

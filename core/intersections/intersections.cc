@@ -1,0 +1,595 @@
+// Intersection topology and lanelets (see intersections.h).
+#include "core/intersections/intersections.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <sstream>
+
+namespace lanemap::intersections {
+
+namespace {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+using map::TurnDirection;
+
+double cross(const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+Vector2d unit(const Vector2d& v, const Vector2d& fallback) {
+  const double n = v.norm();
+  return n > 1e-12 ? Vector2d(v / n) : fallback;
+}
+
+bool startsWith(const std::string& s, const std::string& prefix) { return s.rfind(prefix, 0) == 0; }
+
+// Closest point of a polyline: arc length and signed lateral offset (left positive).
+struct Projection {
+  double s = 0.0, d = 0.0, distance = 0.0;
+};
+Projection project(const std::vector<Vector2d>& line, const Vector2d& p) {
+  Projection best;
+  best.distance = std::numeric_limits<double>::infinity();
+  double s0 = 0.0;
+  for (size_t i = 0; i + 1 < line.size(); ++i) {
+    const Vector2d ab = line[i + 1] - line[i];
+    const double len = ab.norm();
+    const double t = len > 1e-12 ? std::clamp((p - line[i]).dot(ab) / (len * len), 0.0, 1.0) : 0.0;
+    const Vector2d q = line[i] + t * ab;
+    const double dist = (p - q).norm();
+    if (dist < best.distance) {
+      best.distance = dist;
+      best.s = s0 + t * len;
+      best.d = len > 1e-12 ? cross(ab / len, p - line[i]) : 0.0;
+    }
+    s0 += len;
+  }
+  return best;
+}
+
+// Direction of a lane at its end (or start) over the last (first) `length` metres.
+Vector2d laneTangent(const std::vector<Vector3d>& c, bool at_end, double length) {
+  const size_t n = c.size();
+  const Vector2d p = (at_end ? c[n - 1] : c[0]).head<2>();
+  Vector2d q = p;
+  for (size_t k = 1; k < n; ++k) {
+    q = (at_end ? c[n - 1 - k] : c[k]).head<2>();
+    if ((q - p).norm() >= length) break;
+  }
+  return unit(at_end ? Vector2d(p - q) : Vector2d(q - p), Vector2d::UnitX());
+}
+
+// One lane where a road meets the intersection.
+struct LaneEnd {
+  int64_t lanelet = -1;
+  Vector3d centre = Vector3d::Zero();  // end (incoming) or start (outgoing) of the centre line
+  Vector2d tangent = Vector2d::UnitX();
+  Vector3d left = Vector3d::Zero(), right = Vector3d::Zero();  // bound end points
+  double lateral = 0.0;  // signed offset from the road polyline (left positive)
+  bool pocket = false;
+  Movements moves;
+};
+
+struct Approach {
+  const skeleton::AtomicRoad* road = nullptr;
+  Vector2d tangent = Vector2d::UnitX();  // road direction at the intersection
+  std::vector<LaneEnd> lanes;            // left to right
+};
+
+Vector3d boundEnd(const map::LaneMap& m, int64_t line_id, const Vector3d& near) {
+  const map::LineString* l = m.line(line_id);
+  if (!l || l->points.empty()) return near;
+  const Vector3d& a = l->points.front();
+  const Vector3d& b = l->points.back();
+  return (a - near).head<2>().norm() <= (b - near).head<2>().norm() ? a : b;
+}
+
+class Builder {
+ public:
+  Builder(const skeleton::Skeleton& sk, const skeleton::Intersection& in,
+          const std::map<int64_t, map::LaneMap>& roads, const IntersectionOptions& o,
+          const std::vector<osm::Restriction>& restrictions, int64_t id_base)
+      : sk_(sk), in_(in), roads_(roads), o_(o), restrictions_(restrictions), next_id_(id_base + 1) {}
+
+  IntersectionResult build() {
+    result_.intersection_id = in_.id;
+    const map::LaneMap* any = nullptr;
+    for (int64_t rid : in_.incoming) {
+      Approach a;
+      if (approach(rid, true, &a, &any)) ins_.push_back(std::move(a));
+    }
+    for (int64_t rid : in_.outgoing) {
+      Approach a;
+      if (approach(rid, false, &a, &any)) outs_.push_back(std::move(a));
+    }
+    if (any) {
+      result_.map.origin_lat = any->origin_lat;
+      result_.map.origin_lon = any->origin_lon;
+      result_.map.origin_alt = any->origin_alt;
+    }
+    for (const Approach& a : ins_) connectApproach(a);
+    return std::move(result_);
+  }
+
+ private:
+  bool approach(int64_t road_id, bool incoming, Approach* out, const map::LaneMap** any) {
+    const skeleton::AtomicRoad* road = sk_.road(road_id);
+    const auto it = roads_.find(road_id);
+    if (!road || it == roads_.end() || road->polyline.size() < 2) return false;
+    const map::LaneMap& m = it->second;
+    out->road = road;
+    const double s_edge = incoming ? road->s_end : road->s_begin;
+    const double s_far = incoming ? std::max(0.0, s_edge - o_.road_tangent_m)
+                                  : std::min(road->length, s_edge + o_.road_tangent_m);
+    const Vector2d p_edge = sk_.pointAt(*road, s_edge), p_far = sk_.pointAt(*road, s_far);
+    out->tangent = unit(incoming ? Vector2d(p_edge - p_far) : Vector2d(p_far - p_edge),
+                        sk_.tangentAt(*road, s_edge));
+    std::set<int64_t> ids;
+    std::set<int64_t> has_pred;
+    for (const auto& ll : m.lanelets) ids.insert(ll.id);
+    for (const auto& ll : m.lanelets) {
+      for (int64_t s : ll.successors) has_pred.insert(s);
+    }
+    for (const auto& ll : m.lanelets) {
+      if (ll.kind != map::LaneletKind::kRoad || ll.centre.size() < 2) continue;
+      if (ll.road_id >= 0 && ll.road_id != road_id) continue;
+      if (incoming) {
+        const bool continues = std::any_of(ll.successors.begin(), ll.successors.end(),
+                                           [&](int64_t s) { return ids.count(s) > 0; });
+        if (continues) continue;
+      } else if (has_pred.count(ll.id)) {
+        continue;
+      }
+      const Vector3d c = incoming ? ll.centre.back() : ll.centre.front();
+      const Projection pr = project(road->polyline, c.head<2>());
+      if (incoming ? pr.s < road->s_end - o_.end_tolerance_m : pr.s > road->s_begin + o_.end_tolerance_m) continue;
+      LaneEnd e;
+      e.lanelet = ll.id;
+      e.centre = c;
+      e.tangent = laneTangent(ll.centre, incoming, o_.lane_tangent_m);
+      e.left = boundEnd(m, ll.left_id, c);
+      e.right = boundEnd(m, ll.right_id, c);
+      e.lateral = pr.d;
+      if (incoming) e.pocket = chainStart(m, ll, road) > road->s_begin + o_.pocket_min_m;
+      out->lanes.push_back(e);
+    }
+    if (out->lanes.empty()) return false;
+    std::stable_sort(out->lanes.begin(), out->lanes.end(),
+                     [](const LaneEnd& a, const LaneEnd& b) { return a.lateral > b.lateral; });
+    if (incoming) assignMovements(out);
+    if (!*any) *any = &m;
+    return true;
+  }
+
+  // Arc length where the lane of `ll` starts: back through predecessors that continue it (their
+  // centre ends where this one's starts), not through a split.
+  double chainStart(const map::LaneMap& m, const map::Lanelet& ll, const skeleton::AtomicRoad* road) const {
+    const map::Lanelet* cur = &ll;
+    for (size_t guard = 0; guard < m.lanelets.size(); ++guard) {
+      const map::Lanelet* prev = nullptr;
+      for (const auto& q : m.lanelets) {
+        if (q.centre.empty() || &q == cur) continue;
+        if (std::find(q.successors.begin(), q.successors.end(), cur->id) == q.successors.end()) continue;
+        if ((q.centre.back() - cur->centre.front()).head<2>().norm() < 0.5) prev = &q;
+      }
+      if (!prev) break;
+      cur = prev;
+    }
+    return project(road->polyline, cur->centre.front().head<2>()).s;
+  }
+
+  void assignMovements(Approach* a) const {
+    auto& lanes = a->lanes;
+    if (o_.use_turn_lanes) {
+      const std::vector<Movements> tags = turnLanes(*a->road);
+      if (!tags.empty()) {
+        if (tags.size() == lanes.size()) {
+          for (size_t i = 0; i < lanes.size(); ++i) lanes[i].moves = tags[i];
+        } else {
+          std::vector<size_t> regular;
+          for (size_t i = 0; i < lanes.size(); ++i) {
+            if (!lanes[i].pocket) regular.push_back(i);
+          }
+          if (tags.size() == regular.size()) {
+            for (size_t j = 0; j < regular.size(); ++j) lanes[regular[j]].moves = tags[j];
+          }
+        }
+      }
+    }
+    if (o_.pockets_are_turn_lanes && lanes.size() > 1) {
+      for (size_t i = 0; i < lanes.size(); ++i) {
+        LaneEnd& l = lanes[i];
+        if (!l.pocket || l.moves.specified) continue;
+        if (i == 0) l.moves.left = l.moves.specified = true;
+        if (i + 1 == lanes.size()) l.moves.right = l.moves.specified = true;
+      }
+    }
+  }
+
+  static bool isUturn(const skeleton::AtomicRoad& a, const skeleton::AtomicRoad& d) {
+    return d.id == a.reverse_id || (d.way_id == a.way_id && d.from == a.to && d.to == a.from &&
+                                    d.osm_nodes.size() == a.osm_nodes.size() &&
+                                    std::equal(d.osm_nodes.begin(), d.osm_nodes.end(), a.osm_nodes.rbegin()));
+  }
+
+  // The movement a restriction value names: kNone for no_entry/no_exit and unknown values.
+  static TurnDirection restrictionMovement(const std::string& r, bool* uturn) {
+    *uturn = r.find("u_turn") != std::string::npos;
+    if (r.find("left_turn") != std::string::npos) return TurnDirection::kLeft;
+    if (r.find("right_turn") != std::string::npos) return TurnDirection::kRight;
+    if (r.find("straight_on") != std::string::npos) return TurnDirection::kStraight;
+    return TurnDirection::kNone;
+  }
+
+  bool viaHere(int64_t node) const {
+    return node == in_.id || std::find(in_.osm_nodes.begin(), in_.osm_nodes.end(), node) != in_.osm_nodes.end();
+  }
+
+  // True when the OSM turn restrictions forbid a -> d.
+  bool restricted(const Approach& a, const Approach& d, TurnDirection movement, bool uturn) const {
+    if (!o_.use_restrictions) return false;
+    bool only_applies = false, only_ok = false;
+    for (const auto& r : restrictions_) {
+      if (r.from_way != a.road->way_id || !viaHere(r.via_node)) continue;
+      const bool only = startsWith(r.restriction, "only_");
+      if (!only && !startsWith(r.restriction, "no_")) continue;
+      bool target = r.to_way == d.road->way_id;
+      if (target) {
+        // Several ways out on to_way (a way not split at the node, or the same way back): the
+        // restriction's own movement says which.
+        int on_way = 0;
+        for (const Approach& o : outs_) on_way += o.road->way_id == r.to_way ? 1 : 0;
+        bool r_uturn = false;
+        const TurnDirection rm = restrictionMovement(r.restriction, &r_uturn);
+        if (on_way > 1 && (r_uturn || rm != TurnDirection::kNone)) {
+          target = r_uturn ? uturn : (!uturn && rm == movement);
+        }
+      }
+      if (only) {
+        only_applies = true;
+        only_ok |= target;
+      } else if (target) {
+        return true;
+      }
+    }
+    return only_applies && !only_ok;
+  }
+
+  // (in lane, out lane) pairs of one movement.
+  std::vector<std::pair<int, int>> pairLanes(const Approach& a, const Approach& d, TurnDirection movement,
+                                             bool uturn) const {
+    std::vector<std::pair<int, int>> out;
+    const int nin = static_cast<int>(a.lanes.size()), nout = static_cast<int>(d.lanes.size());
+    bool any_specified = false;
+    for (const auto& l : a.lanes) any_specified |= l.moves.specified;
+    std::vector<int> cand;
+    const auto alignLeft = [&] {
+      for (int j = 0; j < static_cast<int>(cand.size()) && j < nout; ++j) out.emplace_back(cand[j], j);
+    };
+    const auto alignRight = [&] {
+      for (int j = 0; j < static_cast<int>(cand.size()) && j < nout; ++j) {
+        out.emplace_back(cand[cand.size() - 1 - j], nout - 1 - j);
+      }
+    };
+    if (uturn) {
+      for (int i = 0; i < nin; ++i) {
+        if (a.lanes[i].moves.reverse) cand.push_back(i);
+      }
+      if (cand.empty()) cand.push_back(o_.right_hand_traffic ? 0 : nin - 1);
+      cand.resize(1);
+      o_.right_hand_traffic ? alignLeft() : alignRight();
+      return out;
+    }
+    if (movement == TurnDirection::kStraight) {
+      for (int i = 0; i < nin; ++i) {
+        const auto& m = a.lanes[i].moves;
+        if (!m.specified || m.straight) cand.push_back(i);
+      }
+      o_.right_hand_traffic ? alignLeft() : alignRight();
+      return out;
+    }
+    const bool left = movement == TurnDirection::kLeft;
+    for (int i = 0; i < nin; ++i) {
+      const auto& m = a.lanes[i].moves;
+      if (m.specified && (left ? m.left : m.right)) cand.push_back(i);
+    }
+    if (cand.empty()) {
+      const int edge = left ? 0 : nin - 1;
+      // Tagged lanes with no such movement: only an untagged edge lane may turn.
+      if (any_specified && a.lanes[edge].moves.specified) return out;
+      cand.push_back(edge);
+    }
+    left ? alignLeft() : alignRight();
+    return out;
+  }
+
+  void connectApproach(const Approach& a) {
+    std::vector<int> connections(a.lanes.size(), 0);
+    const Approach* straightest = nullptr;
+    double best_dot = -2.0;
+    for (const Approach& d : outs_) {
+      const bool uturn = isUturn(*a.road, *d.road);
+      if (uturn && !o_.allow_u_turns) continue;
+      const TurnDirection movement =
+          uturn ? (o_.right_hand_traffic ? TurnDirection::kLeft : TurnDirection::kRight)
+                : turnDirection(a.tangent, d.tangent, o_.straight_max_deg);
+      if (restricted(a, d, movement, uturn)) continue;
+      if (!uturn && a.tangent.dot(d.tangent) > best_dot) {
+        best_dot = a.tangent.dot(d.tangent);
+        straightest = &d;
+      }
+      for (const auto& [i, o] : pairLanes(a, d, movement, uturn)) {
+        connect(a, i, d, o, movement, false);
+        ++connections[i];
+      }
+    }
+    if (!o_.connect_orphan_lanes || !straightest) return;
+    const int nin = static_cast<int>(a.lanes.size()), nout = static_cast<int>(straightest->lanes.size());
+    const TurnDirection movement = turnDirection(a.tangent, straightest->tangent, o_.straight_max_deg);
+    for (int i = 0; i < nin; ++i) {
+      if (connections[i]) continue;
+      const int o = o_.right_hand_traffic ? std::min(i, nout - 1) : nout - 1 - std::min(nin - 1 - i, nout - 1);
+      connect(a, i, *straightest, o, movement, true);
+    }
+  }
+
+  void connect(const Approach& a, int i, const Approach& d, int o, TurnDirection movement, bool orphan) {
+    const LaneEnd& from = a.lanes[i];
+    const LaneEnd& to = d.lanes[o];
+    const ConnectionCurve curve =
+        connectionCurve(from.centre.head<2>(), from.tangent, to.centre.head<2>(), to.tangent, o_.curve);
+    const std::vector<Vector2d> pts = curve.sample(o_.curve.step_m);
+    const size_t n = pts.size();
+    std::vector<double> u(n, 0.0);
+    for (size_t k = 1; k < n; ++k) u[k] = u[k - 1] + (pts[k] - pts[k - 1]).norm();
+    const double total = std::max(1e-9, u.back());
+    for (double& x : u) x /= total;
+    const auto offsets = [](const LaneEnd& e) {
+      const Vector2d nrm(-e.tangent.y(), e.tangent.x());
+      return std::pair<double, double>(nrm.dot((e.left - e.centre).head<2>()), nrm.dot((e.right - e.centre).head<2>()));
+    };
+    const auto [dl0, dr0] = offsets(from);
+    const auto [dl1, dr1] = offsets(to);
+    map::LineString left, right;
+    left.type = right.type = map::LineType::kVirtual;
+    map::Lanelet ll;
+    const Vector2d chord = unit(to.centre.head<2>() - from.centre.head<2>(), from.tangent);
+    for (size_t k = 0; k < n; ++k) {
+      const double param = static_cast<double>(k) / static_cast<double>(n - 1);
+      const Vector2d t = unit(curve.derivative(param), chord);
+      const Vector2d nrm(-t.y(), t.x());
+      const double z = (1.0 - u[k]) * from.centre.z() + u[k] * to.centre.z();
+      const double dl = (1.0 - u[k]) * dl0 + u[k] * dl1, dr = (1.0 - u[k]) * dr0 + u[k] * dr1;
+      const Vector2d pl = pts[k] + dl * nrm, pr = pts[k] + dr * nrm;
+      ll.centre.emplace_back(pts[k].x(), pts[k].y(), z);
+      left.points.emplace_back(pl.x(), pl.y(), z);
+      right.points.emplace_back(pr.x(), pr.y(), z);
+    }
+    ll.centre.front() = from.centre;
+    ll.centre.back() = to.centre;
+    left.points.front() = from.left;
+    left.points.back() = to.left;
+    right.points.front() = from.right;
+    right.points.back() = to.right;
+    left.id = next_id_++;
+    right.id = next_id_++;
+    ll.id = next_id_++;
+    ll.kind = map::LaneletKind::kIntersection;
+    ll.left_id = left.id;
+    ll.right_id = right.id;
+    ll.successors = {to.lanelet};
+    ll.turn = turnDirection(from.tangent, to.tangent, o_.straight_max_deg);
+    ll.intersection_id = in_.id;
+    Connection c;
+    c.lanelet_id = ll.id;
+    c.in_road = a.road->id;
+    c.out_road = d.road->id;
+    c.in_lanelet = from.lanelet;
+    c.out_lanelet = to.lanelet;
+    c.in_index = i;
+    c.out_index = o;
+    c.movement = movement;
+    c.turn = ll.turn;
+    c.quadratic = curve.quadratic;
+    c.orphan = orphan;
+    result_.connections.push_back(c);
+    result_.map.lines.push_back(std::move(left));
+    result_.map.lines.push_back(std::move(right));
+    result_.map.lanelets.push_back(std::move(ll));
+  }
+
+  const skeleton::Skeleton& sk_;
+  const skeleton::Intersection& in_;
+  const std::map<int64_t, map::LaneMap>& roads_;
+  const IntersectionOptions& o_;
+  const std::vector<osm::Restriction>& restrictions_;
+  int64_t next_id_;
+  std::vector<Approach> ins_, outs_;
+  IntersectionResult result_;
+};
+
+}  // namespace
+
+Movements parseTurnLane(const std::string& entry) {
+  Movements m;
+  std::stringstream ss(entry);
+  std::string tok;
+  while (std::getline(ss, tok, ';')) {
+    tok.erase(0, tok.find_first_not_of(' '));
+    tok.erase(tok.find_last_not_of(' ') + 1);
+    if (tok.empty() || tok == "none") continue;
+    if (tok == "reverse") {
+      m.reverse = m.specified = true;
+    } else if (tok.find("merge") != std::string::npos || tok == "through") {
+      m.straight = m.specified = true;
+    } else if (tok.find("left") != std::string::npos) {
+      m.left = m.specified = true;
+    } else if (tok.find("right") != std::string::npos) {
+      m.right = m.specified = true;
+    }
+  }
+  return m;
+}
+
+std::vector<Movements> turnLanes(const skeleton::AtomicRoad& road) {
+  std::string key = "turn:lanes";
+  if (road.reverse_id >= 0) key = road.along_way ? "turn:lanes:forward" : "turn:lanes:backward";
+  const auto it = road.tags.find(key);
+  std::vector<Movements> out;
+  if (it == road.tags.end() || it->second.empty()) return out;
+  std::string cur;
+  for (char ch : it->second + "|") {
+    if (ch == '|') {
+      out.push_back(parseTurnLane(cur));
+      cur.clear();
+    } else {
+      cur += ch;
+    }
+  }
+  return out;
+}
+
+IntersectionOptions IntersectionOptions::fromYaml(const YAML::Node& node) {
+  IntersectionOptions o;
+  if (!node || node.IsNull()) return o;
+  if (!node.IsMap()) throw IntersectionsError("intersections options: expected a map");
+  try {
+    for (const auto& kv : node) {
+      const std::string k = kv.first.as<std::string>();
+      const YAML::Node& v = kv.second;
+      if (k == "right_hand_traffic") o.right_hand_traffic = v.as<bool>();
+      else if (k == "allow_u_turns") o.allow_u_turns = v.as<bool>();
+      else if (k == "use_turn_lanes") o.use_turn_lanes = v.as<bool>();
+      else if (k == "use_restrictions") o.use_restrictions = v.as<bool>();
+      else if (k == "pockets_are_turn_lanes") o.pockets_are_turn_lanes = v.as<bool>();
+      else if (k == "connect_orphan_lanes") o.connect_orphan_lanes = v.as<bool>();
+      else if (k == "straight_max_deg") o.straight_max_deg = v.as<double>();
+      else if (k == "end_tolerance_m") o.end_tolerance_m = v.as<double>();
+      else if (k == "lane_tangent_m") o.lane_tangent_m = v.as<double>();
+      else if (k == "road_tangent_m") o.road_tangent_m = v.as<double>();
+      else if (k == "pocket_min_m") o.pocket_min_m = v.as<double>();
+      else if (k == "parallel_deg") o.curve.parallel_deg = v.as<double>();
+      else if (k == "min_control_fraction") o.curve.min_control_fraction = v.as<double>();
+      else if (k == "max_control_fraction") o.curve.max_control_fraction = v.as<double>();
+      else if (k == "cubic_handle_fraction") o.curve.cubic_handle_fraction = v.as<double>();
+      else if (k == "step_m") o.curve.step_m = v.as<double>();
+      else if (k == "id_base") o.id_base = v.as<int64_t>();
+      else throw IntersectionsError("intersections options: unknown key '" + k + "'");
+    }
+  } catch (const YAML::Exception& e) {
+    throw IntersectionsError(std::string("intersections options: ") + e.what());
+  }
+  o.validate();
+  return o;
+}
+
+void IntersectionOptions::validate() const {
+  const auto check = [](bool ok, const char* what) {
+    if (!ok) throw IntersectionsError(std::string("intersections options: ") + what);
+  };
+  check(straight_max_deg > 0.0 && straight_max_deg < 90.0, "straight_max_deg must be in (0, 90)");
+  check(end_tolerance_m >= 0.0, "end_tolerance_m must be >= 0");
+  check(lane_tangent_m > 0.0, "lane_tangent_m must be > 0");
+  check(road_tangent_m > 0.0, "road_tangent_m must be > 0");
+  check(pocket_min_m >= 0.0, "pocket_min_m must be >= 0");
+  check(curve.parallel_deg >= 0.0 && curve.parallel_deg < 90.0, "parallel_deg must be in [0, 90)");
+  check(curve.min_control_fraction >= 0.0 && curve.max_control_fraction > curve.min_control_fraction,
+        "need 0 <= min_control_fraction < max_control_fraction");
+  check(curve.cubic_handle_fraction > 0.0 && curve.cubic_handle_fraction <= 1.0, "cubic_handle_fraction must be in (0, 1]");
+  check(curve.step_m > 0.0, "step_m must be > 0");
+  check(id_base >= 0, "id_base must be >= 0");
+}
+
+IntersectionResult buildIntersection(const skeleton::Skeleton& skeleton, int64_t intersection_id,
+                                     const std::map<int64_t, map::LaneMap>& roads,
+                                     const IntersectionOptions& options,
+                                     const std::vector<osm::Restriction>& restrictions) {
+  options.validate();
+  const auto& all = skeleton.intersections();
+  const auto it = std::find_if(all.begin(), all.end(), [&](const auto& in) { return in.id == intersection_id; });
+  if (it == all.end()) throw IntersectionsError("unknown intersection id " + std::to_string(intersection_id));
+  const int64_t base = options.id_base > 0 ? options.id_base : kIdBase + 100000 * static_cast<int64_t>(it - all.begin());
+  return Builder(skeleton, *it, roads, options, restrictions, base).build();
+}
+
+std::vector<IntersectionResult> buildIntersections(const skeleton::Skeleton& skeleton,
+                                                   const std::map<int64_t, map::LaneMap>& roads,
+                                                   const IntersectionOptions& options,
+                                                   const std::vector<osm::Restriction>& restrictions) {
+  std::vector<IntersectionResult> out;
+  for (const auto& in : skeleton.intersections()) {
+    const auto known = [&](const std::vector<int64_t>& ids) {
+      return std::any_of(ids.begin(), ids.end(), [&](int64_t id) { return roads.count(id) > 0; });
+    };
+    if (!known(in.incoming) || !known(in.outgoing)) continue;
+    IntersectionOptions o = options;
+    o.id_base = 0;  // per intersection
+    IntersectionResult r = buildIntersection(skeleton, in.id, roads, o, restrictions);
+    if (!r.connections.empty()) out.push_back(std::move(r));
+  }
+  return out;
+}
+
+void appendIntersection(map::LaneMap& whole, const IntersectionResult& result) {
+  std::set<int64_t> old_lanelets, old_lines;
+  for (const auto& ll : whole.lanelets) {
+    if (ll.kind == map::LaneletKind::kIntersection && ll.intersection_id == result.intersection_id) {
+      old_lanelets.insert(ll.id);
+      old_lines.insert(ll.left_id);
+      old_lines.insert(ll.right_id);
+    }
+  }
+  for (const auto& ll : result.map.lanelets) old_lanelets.insert(ll.id);
+  for (const auto& l : result.map.lines) old_lines.insert(l.id);
+  whole.lanelets.erase(std::remove_if(whole.lanelets.begin(), whole.lanelets.end(),
+                                      [&](const map::Lanelet& ll) { return old_lanelets.count(ll.id) > 0; }),
+                       whole.lanelets.end());
+  whole.lines.erase(std::remove_if(whole.lines.begin(), whole.lines.end(),
+                                   [&](const map::LineString& l) { return old_lines.count(l.id) > 0; }),
+                    whole.lines.end());
+  for (auto& ll : whole.lanelets) {
+    ll.successors.erase(std::remove_if(ll.successors.begin(), ll.successors.end(),
+                                       [&](int64_t s) { return old_lanelets.count(s) > 0; }),
+                        ll.successors.end());
+  }
+  whole.lines.insert(whole.lines.end(), result.map.lines.begin(), result.map.lines.end());
+  whole.lanelets.insert(whole.lanelets.end(), result.map.lanelets.begin(), result.map.lanelets.end());
+  for (const auto& c : result.connections) {
+    for (auto& ll : whole.lanelets) {
+      if (ll.id == c.in_lanelet) {
+        if (std::find(ll.successors.begin(), ll.successors.end(), c.lanelet_id) == ll.successors.end()) {
+          ll.successors.push_back(c.lanelet_id);
+        }
+        break;
+      }
+    }
+  }
+}
+
+std::map<int64_t, map::LaneMap> roadsOf(const map::LaneMap& whole) {
+  std::map<int64_t, map::LaneMap> out;
+  std::map<int64_t, const map::LineString*> lines;
+  for (const auto& l : whole.lines) lines[l.id] = &l;
+  for (const auto& ll : whole.lanelets) {
+    if (ll.kind != map::LaneletKind::kRoad || ll.road_id < 0) continue;
+    auto [it, fresh] = out.try_emplace(ll.road_id);
+    map::LaneMap& m = it->second;
+    if (fresh) {
+      m.origin_lat = whole.origin_lat;
+      m.origin_lon = whole.origin_lon;
+      m.origin_alt = whole.origin_alt;
+    }
+    m.lanelets.push_back(ll);
+    for (int64_t id : {ll.left_id, ll.right_id, ll.stop_line_id.value_or(-1)}) {
+      const auto l = lines.find(id);
+      if (l == lines.end()) continue;
+      if (std::none_of(m.lines.begin(), m.lines.end(), [&](const auto& x) { return x.id == id; })) {
+        m.lines.push_back(*l->second);
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace lanemap::intersections

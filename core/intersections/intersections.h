@@ -1,0 +1,123 @@
+// Intersections (METHOD.md section 5, Algorithm 2): which lane of an incoming road connects to which
+// lane of an outgoing road, and the reference trajectory of every connection as a Lanelet2
+// intersection lanelet (kind kIntersection, turn_direction, virtual bounds) that shares its end
+// points with the road lanelets it joins.
+//
+// Topology. For every incoming road E_in and outgoing road E_out of the intersection:
+// - the movement is the heading change between the roads (straight below straight_max_deg, else
+//   left/right); U-turns (E_out is E_in's reverse) are skipped unless allowed; OSM turn
+//   restrictions (no_* / only_*, via the intersection's node) remove movements;
+// - straight: the lanes that may go straight pair k -> k counted from the inner side (the left in
+//   right-hand traffic: METHOD.md's "left lanes to left lanes", k = 1..min(N_in, N_out));
+// - left turns from the left-most lane (the lanes tagged left in turn:lanes, several when tagged)
+//   into the out road's left-most lanes; right turns from the right-most into the right-most;
+// - `turn:lanes` (`:forward`/`:backward` on two-way ways) of the incoming road says which lanes may
+//   do what, when its count matches the lanes found (turn pockets found in the lanes, which OSM
+//   does not list, are set aside first); a turn pocket with no tag is a turn lane (inner side:
+//   the turn across traffic, outer side: the other);
+// - a lane left with no connection continues into the straightest allowed way out (a lane drop
+//   merges rather than ending in the middle of the intersection).
+// Geometry: quadratic Bezier P0 -> P2 with P the tangents' intersection, cubic fallback (curve.h);
+// bounds: the centre curve offset by the lane's left/right offsets, interpolated from the incoming
+// lane's end to the outgoing lane's start, end points exactly the road lanelets' bound end points
+// (successors share end points, as Lanelet2 requires); typed virtual.
+#pragma once
+
+#include "core/intersections/curve.h"
+#include "core/map/lane_map.h"
+#include "core/osm/osm_data.h"
+#include "core/skeleton/skeleton.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace lanemap::intersections {
+
+class IntersectionsError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct IntersectionOptions {
+  bool right_hand_traffic = true;  // false: left-hand traffic (inner side = right)
+  bool allow_u_turns = false;      // a U-turn movement also needs lanes on both roads
+  bool use_turn_lanes = true;      // honour turn:lanes tags
+  bool use_restrictions = true;    // honour turn restriction relations
+  bool pockets_are_turn_lanes = true;
+  bool connect_orphan_lanes = true;
+  double straight_max_deg = 40.0;  // |heading change| below this is straight
+  // A lanelet with no successor on its road ends at the intersection when its end projects within
+  // this of the road's s_end (for outgoing roads: starts within this of s_begin).
+  double end_tolerance_m = 12.0;
+  double lane_tangent_m = 3.0;     // a lane's end direction over its last (first) metres
+  double road_tangent_m = 15.0;    // a road's direction over this much past its ROI edge
+  double pocket_min_m = 10.0;      // a lane that starts this far into the road is a pocket
+  CurveOptions curve;
+  // Ids of the fragment: id_base + 1, + 2, ... ; 0 = kIdBase + 100000 * (index of the
+  // intersection in skeleton.intersections()), clear of core/lanes' (road_id + 1) * 100000 + k.
+  int64_t id_base = 0;
+
+  static IntersectionOptions fromYaml(const YAML::Node& node);  // throws IntersectionsError
+  void validate() const;                                         // throws IntersectionsError
+};
+
+inline constexpr int64_t kIdBase = 1000000000000;  // 1e12
+
+// turn:lanes of one lane (OSM `turn:lanes` entry, e.g. "left;through").
+struct Movements {
+  bool specified = false;  // false for "", "none"
+  bool left = false, straight = false, right = false, reverse = false;
+};
+Movements parseTurnLane(const std::string& entry);
+// The turn:lanes entries of a road in its driving direction, left to right; empty when untagged.
+std::vector<Movements> turnLanes(const skeleton::AtomicRoad& road);
+
+struct Connection {
+  int64_t lanelet_id = -1;              // the intersection lanelet
+  int64_t in_road = -1, out_road = -1;
+  int64_t in_lanelet = -1, out_lanelet = -1;  // road lanelets it joins
+  int in_index = -1, out_index = -1;    // lane index from the left at the road's end / start
+  map::TurnDirection movement = map::TurnDirection::kNone;  // of the road pair
+  map::TurnDirection turn = map::TurnDirection::kNone;      // the lanelet's own heading change
+  bool quadratic = false;               // false: cubic fallback
+  bool orphan = false;                  // added by connect_orphan_lanes
+};
+
+struct IntersectionResult {
+  int64_t intersection_id = -1;
+  map::LaneMap map;  // the intersection lanelets and their bounds (origin of the road maps)
+  std::vector<Connection> connections;
+};
+
+// One intersection. `roads`: road id -> that road's lanes (map::LaneMap as core/lanes'
+// toLaneMap makes it, or a map's road lanelets grouped with roadsOf); roads absent from it, or
+// with no lanelet reaching the intersection, take no part. `restrictions`: the OSM file's turn
+// restrictions (osm::OsmData::restrictions; the skeleton does not keep them). Deterministic.
+// Throws IntersectionsError for an unknown intersection id or bad options.
+IntersectionResult buildIntersection(const skeleton::Skeleton& skeleton, int64_t intersection_id,
+                                     const std::map<int64_t, map::LaneMap>& roads,
+                                     const IntersectionOptions& options = {},
+                                     const std::vector<osm::Restriction>& restrictions = {});
+
+// Every intersection with at least one incoming and one outgoing road in `roads`.
+std::vector<IntersectionResult> buildIntersections(const skeleton::Skeleton& skeleton,
+                                                   const std::map<int64_t, map::LaneMap>& roads,
+                                                   const IntersectionOptions& options = {},
+                                                   const std::vector<osm::Restriction>& restrictions = {});
+
+// Appends the fragment's lines and lanelets to `whole` and adds each intersection lanelet to the
+// successors of its incoming road lanelet (when `whole` has it). Replaces an earlier fragment of
+// the same intersection (lanelets and lines with the fragment's ids are removed first, and so are
+// the successor links to them).
+void appendIntersection(map::LaneMap& whole, const IntersectionResult& result);
+
+// The road lanelets (kind kRoad, road_id >= 0) of a whole map grouped by road id, each with the
+// lines it uses; the input buildIntersection takes, from e.g. the simulator's ground truth.
+std::map<int64_t, map::LaneMap> roadsOf(const map::LaneMap& whole);
+
+}  // namespace lanemap::intersections

@@ -1,0 +1,139 @@
+// Tests of lanemap-eval (tools/eval.cc) on files: hand-made map pairs written with our Lanelet2
+// writer give the JSON keys scripts read with the values evaluate() computes in memory (a missing
+// lane: recall 4/5, intersection recall 2/3); lanelet2Origin recovers the writer's origin; the
+// simulator's ground truth (West Oakland world, built in-process) scores P = R = 1 against itself;
+// a foreign map (Lanelet2's Karlsruhe example) loads and scores against itself and against ours
+// without crashing; bad input fails with a message.
+#include "core/eval/evaluate.h"
+#include "core/io/lanelet2.h"
+#include "core/osm/osm_data.h"
+#include "core/sim/world_builder.h"
+#include "core/skeleton/skeleton.h"
+#include "tests/common/sim_drive.h"
+#include "tests/eval/test_maps.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+
+namespace {
+
+using lanemap::testing::binPath;
+using lanemap::testing::dataPath;
+using lanemap::testing::runCommand;
+using lanemap::testing::TempDir;
+
+nlohmann::json runEval(const std::string& truth, const std::string& map, const std::string& json,
+                       std::string* output = nullptr) {
+  const auto r = runCommand(binPath("lanemap-eval") + " --truth " + truth + " --map " + map + " --json " + json);
+  if (output) *output = r.output;
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(json);
+  if (!in) return {};
+  return nlohmann::json::parse(in);
+}
+
+lanemap::map::LaneMap located(lanemap::map::LaneMap m) {
+  m.origin_lat = 37.81;
+  m.origin_lon = -122.29;
+  return m;
+}
+
+TEST(EvalTool, JsonKeysAndValuesOnAMissingLane) {
+  TempDir dir("eval-tool");
+  const auto truth = located(lanemap::testing::network({}));
+  const auto built = located(lanemap::testing::network(lanemap::testing::with([](lanemap::testing::Net& n) { n.drop_b1 = true; })));
+  lanemap::io::writeLanelet2(truth, dir.str("gt.osm"));
+  lanemap::io::writeLanelet2(built, dir.str("built.osm"));
+  std::string out;
+  const auto j = runEval(dir.str("gt.osm"), dir.str("built.osm"), dir.str("report.json"), &out);
+  ASSERT_FALSE(j.is_null());
+  const auto mem = lanemap::eval::evaluate(truth, built);
+  EXPECT_DOUBLE_EQ(j["lanes"]["recall"].get<double>(), 4.0 / 5.0);
+  EXPECT_DOUBLE_EQ(j["lanes"]["recall"].get<double>(), mem.lane_recall.value());
+  EXPECT_DOUBLE_EQ(j["lanes"]["precision"].get<double>(), 1.0);
+  EXPECT_NEAR(j["lanes"]["rms_m"].get<double>(), 0.0, 1e-3);  // local_x/y: mm precision
+  EXPECT_NEAR(j["lanes"]["miou"].get<double>(), 1.0, 1e-3);
+  EXPECT_DOUBLE_EQ(j["intersections"]["precision"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(j["intersections"]["recall"].get<double>(), 2.0 / 3.0);
+  EXPECT_NEAR(j["intersections"]["rms_m"].get<double>(), 0.0, 1e-3);
+  for (const char* k : {"0.5", "1.0", "1.5"}) {
+    ASSERT_TRUE(j["chamfer_ap"].contains(k)) << k;
+    EXPECT_NEAR(j["chamfer_ap"][k].get<double>(), mem.chamfer_ap.at(std::stod(k)), 1e-6) << k;
+  }
+  EXPECT_TRUE(j.contains("lane_graph"));
+  ASSERT_EQ(j["roads"].size(), 3u);
+  EXPECT_EQ(j["roads"][1]["truth_lanes"].get<int>(), 2);
+  EXPECT_EQ(j["roads"][1]["built_lanes"].get<int>(), 1);
+  EXPECT_EQ(j["lanes_detail"].size(), 5u);
+  EXPECT_NE(out.find("recall 0.800"), std::string::npos) << out;
+}
+
+TEST(EvalTool, OriginOfOurFilesIsTheWritersOrigin) {
+  TempDir dir("eval-origin");
+  const auto truth = located(lanemap::testing::network({}));
+  lanemap::io::writeLanelet2(truth, dir.str("gt.osm"));
+  const auto o = lanemap::eval::lanelet2Origin(dir.str("gt.osm"));
+  // osmium keeps 1e-7 degrees of the node: the origin comes back to about a centimetre.
+  EXPECT_NEAR(o.lat, 37.81, 2e-7);
+  EXPECT_NEAR(o.lon, -122.29, 2e-7);
+  const auto file = lanemap::io::readLanelet2File(dir.str("gt.osm"), o.lat, o.lon);
+  EXPECT_TRUE(file.used_local_xy);
+  // Karlsruhe (no local_x/y): the first node.
+  const auto k = lanemap::eval::lanelet2Origin(dataPath("lanelet2/karlsruhe_mapping_example.osm"));
+  EXPECT_NEAR(k.lat, 49.00345654351, 1e-7);
+  EXPECT_NEAR(k.lon, 8.42427590707, 1e-7);
+  EXPECT_THROW(lanemap::eval::lanelet2Origin(dir.str("missing.osm")), std::exception);
+}
+
+TEST(EvalTool, SimulatorGroundTruthAgainstItselfAndAForeignMap) {
+  TempDir dir("eval-sim");
+  const auto data = lanemap::osm::readOsm(dataPath("osm/west-oakland.osm"));
+  const auto sk = lanemap::skeleton::Skeleton::build(data);
+  lanemap::sim::WorldOptions wo;
+  wo.seed = 5;
+  const auto world = lanemap::sim::buildWorld(sk, wo);
+  const std::string gt = dir.str("groundtruth.osm");
+  lanemap::io::writeLanelet2(world->truth(), gt);
+  const auto self = runEval(gt, gt, dir.str("self.json"));
+  ASSERT_FALSE(self.is_null());
+  EXPECT_GT(self["lanes"]["truth"].get<int>(), 50);
+  EXPECT_DOUBLE_EQ(self["lanes"]["precision"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(self["lanes"]["recall"].get<double>(), 1.0);
+  EXPECT_NEAR(self["lanes"]["rms_m"].get<double>(), 0.0, 1e-9);
+  EXPECT_NEAR(self["lanes"]["miou"].get<double>(), 1.0, 1e-6);
+  EXPECT_GT(self["intersections"]["truth_pairs"].get<int>(), 50);
+  EXPECT_DOUBLE_EQ(self["intersections"]["precision"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(self["intersections"]["recall"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(self["lane_graph"]["recall"].get<double>(), 1.0);
+  for (const char* k : {"0.5", "1.0", "1.5"}) EXPECT_DOUBLE_EQ(self["chamfer_ap"][k].get<double>(), 1.0) << k;
+
+  const std::string karlsruhe = dataPath("lanelet2/karlsruhe_mapping_example.osm");
+  const auto kk = runEval(karlsruhe, karlsruhe, dir.str("kk.json"));
+  ASSERT_FALSE(kk.is_null());
+  EXPECT_GT(kk["lanes"]["truth"].get<int>(), 20);
+  EXPECT_DOUBLE_EQ(kk["lanes"]["precision"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(kk["lanes"]["recall"].get<double>(), 1.0);
+  EXPECT_TRUE(kk["intersections"]["precision"].is_null());  // no intersection lanelets: n/a
+  // Two maps 9000 km apart: nothing matches, nothing crashes.
+  const auto ko = runEval(karlsruhe, gt, dir.str("ko.json"));
+  ASSERT_FALSE(ko.is_null());
+  EXPECT_DOUBLE_EQ(ko["lanes"]["precision"].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(ko["lanes"]["recall"].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(ko["intersections"]["precision"].get<double>(), 0.0);
+}
+
+TEST(EvalTool, BadInputFailsWithAMessage) {
+  TempDir dir("eval-bad");
+  const auto r = runCommand(binPath("lanemap-eval") + " --truth " + dir.str("nope.osm") + " --map " + dir.str("nope.osm"));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("nope.osm"), std::string::npos) << r.output;
+  std::ofstream(dir.str("bad.osm")) << "<osm><relation id='1'><member type='way' ref='5' role='left'/>"
+                                       "<tag k='type' v='lanelet'/></relation></osm>";
+  const auto b = runCommand(binPath("lanemap-eval") + " --truth " + dir.str("bad.osm") + " --map " + dir.str("bad.osm"));
+  EXPECT_EQ(b.exit_code, 1) << b.output;
+  EXPECT_EQ(runCommand(binPath("lanemap-eval") + " --map x.osm").exit_code, 106);  // CLI11: --truth required
+}
+
+}  // namespace

@@ -1,0 +1,458 @@
+// Tests of core/intersections: the curve (hand-computed Bezier points, the cubic fallbacks), the
+// topology on hand-made crossings with the exact expected (in lane, out lane) pairs (4-way with 1
+// and 2 lanes, T, one-way streets, turn:lanes, turn restrictions incl. one on a way that is not
+// split, a turn pocket, a lane drop, left-hand traffic), the geometry of the intersection lanelets
+// (ends coincide with the lane ends, tangent continuity, no self-intersection, bounds on their
+// sides) and a Lanelet2 write/read round trip that recovers the successors from shared points.
+//
+// Expected pairs: worked out by hand from the rules in intersections.h. Networks (ENU metres):
+// C = node 1 at (0, 0); S = 2 at (0, -120), N = 3 at (0, 120), W = 4 at (-120, 0), E = 5 at (120, 0)
+// (crossings: shape nodes 12 m from C).
+// A pair is (in road's from node, in lane index from the left, out road's to node, out lane index).
+#include "core/intersections/intersections.h"
+
+#include "core/io/lanelet2.h"
+#include "tests/common/sim_drive.h"
+#include "tests/intersections/fixture.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace {
+
+using Eigen::Vector2d;
+using lanemap::intersections::buildIntersection;
+using lanemap::intersections::connectionCurve;
+using lanemap::intersections::IntersectionOptions;
+using lanemap::intersections::IntersectionResult;
+using lanemap::map::TurnDirection;
+using lanemap::testing::LaneSpec;
+using lanemap::testing::laneCount;
+using lanemap::testing::Net;
+using lanemap::testing::Pair;
+using lanemap::testing::pairsOf;
+using lanemap::testing::roadLanes;
+
+std::vector<Pair> sorted(std::vector<Pair> v) {
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+Net crossing(lanemap::osm::Tags s = {}, lanemap::osm::Tags n = {}, lanemap::osm::Tags w = {},
+             lanemap::osm::Tags e = {}) {
+  Net net;
+  net.node(1, 0, 0);
+  net.node(2, 0, -120);
+  net.node(3, 0, 120);
+  net.node(4, -120, 0);
+  net.node(5, 120, 0);
+  // Shape nodes 12 m from the junction: the ROI reaches them (skeleton section 0), as on real
+  // crossings with corner radii; without them a right turn between 2-lane roads degenerates.
+  net.node(6, 0, -12);
+  net.node(7, 0, 12);
+  net.node(8, -12, 0);
+  net.node(9, 12, 0);
+  net.way(10, {2, 6, 1}, s);
+  net.way(11, {1, 7, 3}, n);
+  net.way(12, {4, 8, 1}, w);
+  net.way(13, {1, 9, 5}, e);
+  return net;
+}
+
+IntersectionResult run(Net& net, const IntersectionOptions& o = {}, bool pocket_south = false, bool right_hand = true) {
+  const auto sk = net.build();
+  std::map<int64_t, lanemap::map::LaneMap> roads;
+  for (const auto& r : sk.roads()) {
+    LaneSpec spec;
+    spec.lanes = laneCount(r);
+    spec.right_hand = right_hand;
+    spec.left_pocket = pocket_south && r.from == 2 && r.to == 1;
+    roads[r.id] = roadLanes(sk, r, spec);
+  }
+  return buildIntersection(sk, 1, roads, o, net.data.restrictions);
+}
+
+std::vector<Pair> pairs(Net& net, const IntersectionOptions& o = {}, bool pocket_south = false, bool right_hand = true) {
+  const auto sk = net.build();
+  return pairsOf(sk, run(net, o, pocket_south, right_hand));
+}
+
+// ------------------------------------------------------------------ curve
+
+TEST(IntersectionCurve, RightAngleIsTheQuadraticThroughTheTangentIntersection) {
+  const auto c = connectionCurve({0, 0}, {1, 0}, {10, 10}, {0, 1});
+  ASSERT_TRUE(c.quadratic);
+  EXPECT_NEAR((c.control[1] - Vector2d(10, 0)).norm(), 0.0, 1e-12);
+  // B(1/2) = P0/4 + P/2 + P2/4 = (7.5, 2.5)
+  EXPECT_NEAR((c.point(0.5) - Vector2d(7.5, 2.5)).norm(), 0.0, 1e-12);
+  // End tangents along t0 and t2.
+  EXPECT_NEAR(c.derivative(0.0).normalized().dot(Vector2d(1, 0)), 1.0, 1e-12);
+  EXPECT_NEAR(c.derivative(1.0).normalized().dot(Vector2d(0, 1)), 1.0, 1e-12);
+  const auto pts = c.sample(0.5);
+  EXPECT_EQ(pts.size() % 2, 1u);
+  EXPECT_EQ(pts.front(), Vector2d(0, 0));
+  EXPECT_EQ(pts.back(), Vector2d(10, 10));
+  EXPECT_NEAR((pts[pts.size() / 2] - Vector2d(7.5, 2.5)).norm(), 0.0, 1e-12);
+  EXPECT_FALSE(lanemap::intersections::selfIntersects(pts));
+}
+
+TEST(IntersectionCurve, ParallelTangentsFallBackToACubic) {
+  // A lane shift: parallel tangents, no intersection point.
+  const auto c = connectionCurve({0, 0}, {1, 0}, {20, 3}, {1, 0});
+  ASSERT_FALSE(c.quadratic);
+  ASSERT_EQ(c.control.size(), 4u);
+  const double chord = std::hypot(20.0, 3.0);
+  EXPECT_NEAR((c.control[1] - Vector2d(chord / 3, 0)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((c.control[2] - Vector2d(20 - chord / 3, 3)).norm(), 0.0, 1e-12);
+  // By symmetry the midpoint is the chord's midpoint.
+  EXPECT_NEAR((c.point(0.5) - Vector2d(10, 1.5)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(c.derivative(0.0).normalized().dot(Vector2d(1, 0)), 1.0, 1e-12);
+  EXPECT_NEAR(c.derivative(1.0).normalized().dot(Vector2d(1, 0)), 1.0, 1e-12);
+}
+
+TEST(IntersectionCurve, ControlPointBehindAnEndFallsBackToACubic) {
+  // Tangent lines (0,0)+a(1,0) and (-5,10)-b(0,1) meet at (-5,0): a = -5, behind P0.
+  const auto c = connectionCurve({0, 0}, {1, 0}, {-5, 10}, {0, 1});
+  EXPECT_FALSE(c.quadratic);
+  EXPECT_NEAR(c.derivative(0.0).normalized().dot(Vector2d(1, 0)), 1.0, 1e-12);
+  EXPECT_NEAR(c.derivative(1.0).normalized().dot(Vector2d(0, 1)), 1.0, 1e-12);
+}
+
+TEST(IntersectionCurve, TurnDirectionFromTheHeadingChange) {
+  using lanemap::intersections::turnDirection;
+  EXPECT_EQ(turnDirection({1, 0}, {0, 1}), TurnDirection::kLeft);
+  EXPECT_EQ(turnDirection({1, 0}, {0, -1}), TurnDirection::kRight);
+  EXPECT_EQ(turnDirection({1, 0}, {1, 0.5}), TurnDirection::kStraight);  // 26.6 deg
+  EXPECT_EQ(turnDirection({1, 0}, {1, 1}), TurnDirection::kLeft);        // 45 deg
+  EXPECT_EQ(turnDirection({1, 0}, {1, 1}, 50.0), TurnDirection::kStraight);
+}
+
+// ------------------------------------------------------------------ topology
+
+TEST(IntersectionTopology, FourWayOneLaneConnectsEveryMovementButUTurns) {
+  Net net = crossing();
+  const std::vector<Pair> expected = sorted({
+      {2, 0, 3, 0}, {2, 0, 4, 0}, {2, 0, 5, 0},  // from S: straight N, left W, right E
+      {3, 0, 2, 0}, {3, 0, 5, 0}, {3, 0, 4, 0},  // from N: straight S, left E, right W
+      {4, 0, 5, 0}, {4, 0, 3, 0}, {4, 0, 2, 0},  // from W: straight E, left N, right S
+      {5, 0, 4, 0}, {5, 0, 2, 0}, {5, 0, 3, 0},  // from E: straight W, left S, right N
+  });
+  EXPECT_EQ(pairs(net), expected);
+}
+
+TEST(IntersectionTopology, FourWayTwoLanesStraightKToKLeftFromLeftRightFromRight) {
+  const lanemap::osm::Tags two{{"lanes", "4"}};
+  Net net = crossing(two, two, two, two);
+  const std::vector<Pair> expected = sorted({
+      {2, 0, 3, 0}, {2, 1, 3, 1}, {2, 0, 4, 0}, {2, 1, 5, 1},
+      {3, 0, 2, 0}, {3, 1, 2, 1}, {3, 0, 5, 0}, {3, 1, 4, 1},
+      {4, 0, 5, 0}, {4, 1, 5, 1}, {4, 0, 3, 0}, {4, 1, 2, 1},
+      {5, 0, 4, 0}, {5, 1, 4, 1}, {5, 0, 2, 0}, {5, 1, 3, 1},
+  });
+  EXPECT_EQ(pairs(net), expected);
+  // Movements as classified.
+  const auto r = run(net);
+  for (const auto& c : r.connections) {
+    EXPECT_EQ(c.turn, c.movement);
+    EXPECT_FALSE(c.orphan);
+  }
+}
+
+TEST(IntersectionTopology, TJunction) {
+  Net net;
+  net.node(1, 0, 0);
+  net.node(2, 0, -120);
+  net.node(4, -120, 0);
+  net.node(5, 120, 0);
+  net.way(12, {4, 1});
+  net.way(13, {1, 5});
+  net.way(10, {2, 1});
+  const std::vector<Pair> expected = sorted({
+      {4, 0, 5, 0}, {4, 0, 2, 0},  // from W: straight, right
+      {5, 0, 4, 0}, {5, 0, 2, 0},  // from E: straight, left
+      {2, 0, 4, 0}, {2, 0, 5, 0},  // from S: left, right
+  });
+  EXPECT_EQ(pairs(net), expected);
+}
+
+TEST(IntersectionTopology, OneWayStreets) {
+  const lanemap::osm::Tags ow{{"oneway", "yes"}, {"lanes", "2"}};
+  Net net = crossing(ow, ow, ow, ow);  // northbound S->C->N, eastbound W->C->E
+  const std::vector<Pair> expected = sorted({
+      {2, 0, 3, 0}, {2, 1, 3, 1}, {2, 1, 5, 1},  // from S: straight, right from the right lane
+      {4, 0, 5, 0}, {4, 1, 5, 1}, {4, 0, 3, 0},  // from W: straight, left from the left lane
+  });
+  EXPECT_EQ(pairs(net), expected);
+}
+
+TEST(IntersectionTopology, TurnLanesDecideWhichLanesTurn) {
+  const lanemap::osm::Tags s{{"lanes:forward", "3"}, {"lanes:backward", "1"},
+                             {"turn:lanes:forward", "left|through|through;right"}};
+  const lanemap::osm::Tags n{{"lanes:forward", "3"}, {"lanes:backward", "1"}};
+  Net net = crossing(s, n);
+  const std::vector<Pair> expected = sorted({
+      {2, 0, 4, 0},                // left lane only left
+      {2, 1, 3, 0}, {2, 2, 3, 1},  // the two through lanes from the left
+      {2, 2, 5, 0},                // through;right turns right
+      {3, 0, 2, 0}, {3, 0, 5, 0}, {3, 0, 4, 0},
+      {4, 0, 5, 0}, {4, 0, 3, 0}, {4, 0, 2, 0},
+      {5, 0, 4, 0}, {5, 0, 2, 0}, {5, 0, 3, 2},  // right turn into N's right-most lane
+  });
+  EXPECT_EQ(pairs(net), expected);
+  // Without the tags: three straight pairs k -> k, left from lane 0, right from lane 2.
+  IntersectionOptions o;
+  o.use_turn_lanes = false;
+  std::vector<Pair> from_south;
+  for (const auto& p : pairs(net, o)) {
+    if (std::get<0>(p) == 2) from_south.push_back(p);
+  }
+  EXPECT_EQ(from_south, sorted({{2, 0, 3, 0}, {2, 1, 3, 1}, {2, 2, 3, 2}, {2, 0, 4, 0}, {2, 2, 5, 0}}));
+}
+
+TEST(IntersectionTopology, TurnRestrictions) {
+  Net net = crossing();
+  net.restriction("no_left_turn", 10, 1, 12);       // S -> W
+  net.restriction("only_straight_on", 13, 1, 12);   // from E only to W
+  const std::vector<Pair> expected = sorted({
+      {2, 0, 3, 0}, {2, 0, 5, 0},
+      {3, 0, 2, 0}, {3, 0, 5, 0}, {3, 0, 4, 0},
+      {4, 0, 5, 0}, {4, 0, 3, 0}, {4, 0, 2, 0},
+      {5, 0, 4, 0},
+  });
+  EXPECT_EQ(pairs(net), expected);
+  IntersectionOptions o;
+  o.use_restrictions = false;
+  EXPECT_EQ(pairs(net, o).size(), 12u);
+}
+
+TEST(IntersectionTopology, NoUTurnOnAWayNotSplitAtTheNodeLeavesItsStraightOn) {
+  Net net;
+  net.node(1, 0, 0);
+  net.node(2, 0, -120);
+  net.node(4, -120, 0);
+  net.node(5, 120, 0);
+  net.way(20, {4, 1, 5});  // through way, one OSM way on both sides of the junction
+  net.way(10, {2, 1});
+  net.restriction("no_u_turn", 20, 1, 20);
+  IntersectionOptions o;
+  o.allow_u_turns = true;
+  const std::vector<Pair> expected = sorted({
+      {4, 0, 5, 0}, {4, 0, 2, 0},
+      {5, 0, 4, 0}, {5, 0, 2, 0},
+      {2, 0, 4, 0}, {2, 0, 5, 0}, {2, 0, 2, 0},  // the stub may turn back, way 20 may not
+  });
+  EXPECT_EQ(pairs(net, o), expected);
+  // U-turns are off by default.
+  EXPECT_EQ(pairs(net).size(), 6u);
+}
+
+TEST(IntersectionTopology, UntaggedLeftTurnPocketTakesTheLeftTurn) {
+  Net net = crossing();
+  // From S: [pocket, lane]. The pocket turns left, the lane goes straight and right.
+  std::vector<Pair> from_south;
+  for (const auto& p : pairs(net, {}, true)) {
+    if (std::get<0>(p) == 2) from_south.push_back(p);
+  }
+  EXPECT_EQ(from_south, sorted({{2, 0, 4, 0}, {2, 1, 3, 0}, {2, 1, 5, 0}}));
+  // Without the pocket rule the left lane (the pocket) would also go straight.
+  IntersectionOptions o;
+  o.pockets_are_turn_lanes = false;
+  from_south.clear();
+  for (const auto& p : pairs(net, o, true)) {
+    if (std::get<0>(p) == 2) from_south.push_back(p);
+  }
+  EXPECT_EQ(from_south, sorted({{2, 0, 3, 0}, {2, 0, 4, 0}, {2, 1, 5, 0}}));
+}
+
+TEST(IntersectionTopology, TurnLanesSkipAPocketOsmDoesNotList) {
+  // turn:lanes lists the two regular lanes; the mapped road has a pocket on the left as well.
+  Net net = crossing({{"turn:lanes:forward", "through|right"}, {"lanes:forward", "2"}, {"lanes:backward", "1"}});
+  std::vector<Pair> from_south;
+  for (const auto& p : pairs(net, {}, true)) {
+    if (std::get<0>(p) == 2) from_south.push_back(p);
+  }
+  // [pocket, through, right]: the pocket turns left; lane 1 straight; lane 2 right only.
+  EXPECT_EQ(from_south, sorted({{2, 0, 4, 0}, {2, 1, 3, 0}, {2, 2, 5, 0}}));
+}
+
+TEST(IntersectionTopology, LaneDropMergesIntoTheStraightestRoad) {
+  Net net;
+  net.node(1, 0, 0);
+  net.node(3, 0, 120);
+  net.node(4, -120, 0);
+  net.node(5, 120, 0);
+  net.way(30, {4, 1}, {{"oneway", "yes"}, {"lanes", "2"}});
+  net.way(31, {1, 5}, {{"oneway", "yes"}, {"lanes", "1"}});
+  net.way(32, {1, 3});
+  const auto sk = net.build();
+  const auto r = run(net);
+  const std::vector<Pair> expected = sorted({{4, 0, 5, 0}, {4, 0, 3, 0}, {4, 1, 5, 0}, {3, 0, 5, 0}});
+  EXPECT_EQ(pairsOf(sk, r), expected);
+  for (const auto& c : r.connections) {
+    EXPECT_EQ(c.orphan, sk.road(c.in_road)->from == 4 && c.in_index == 1);
+  }
+  IntersectionOptions o;
+  o.connect_orphan_lanes = false;
+  EXPECT_EQ(pairs(net, o).size(), 3u);
+}
+
+TEST(IntersectionTopology, LeftHandTrafficAlignsStraightLanesFromTheRight) {
+  Net net;
+  net.node(1, 0, 0);
+  net.node(4, -120, 0);
+  net.node(5, 120, 0);
+  net.way(30, {4, 1}, {{"oneway", "yes"}, {"lanes", "2"}});
+  net.way(31, {1, 5}, {{"oneway", "yes"}, {"lanes", "1"}});
+  const auto sk = net.build();
+  IntersectionOptions rht, lht;
+  lht.right_hand_traffic = false;
+  const auto a = run(net, rht), b = run(net, lht);
+  ASSERT_EQ(a.connections.size(), 2u);
+  ASSERT_EQ(b.connections.size(), 2u);
+  for (const auto& c : a.connections) EXPECT_EQ(c.orphan, c.in_index == 1);  // inner = left kept
+  for (const auto& c : b.connections) EXPECT_EQ(c.orphan, c.in_index == 0);  // inner = right kept
+}
+
+TEST(IntersectionTopology, DeadEndHasNoConnectionAndUnknownIdThrows) {
+  Net net = crossing();
+  const auto sk = net.build();
+  std::map<int64_t, lanemap::map::LaneMap> roads;
+  for (const auto& r : sk.roads()) roads[r.id] = roadLanes(sk, r, {});
+  EXPECT_TRUE(buildIntersection(sk, 2, roads).connections.empty());  // S is a dead end
+  EXPECT_THROW(buildIntersection(sk, 77, roads), lanemap::intersections::IntersectionsError);
+  // Only the roads given take part: without W's roads, 6 pairs are left (S, N, E each: 2).
+  for (const auto& r : sk.roads()) {
+    if (r.from == 4 || r.to == 4) roads.erase(r.id);
+  }
+  EXPECT_EQ(buildIntersection(sk, 1, roads).connections.size(), 6u);
+}
+
+TEST(IntersectionsYaml, FromYaml) {
+  const auto o = IntersectionOptions::fromYaml(YAML::Load("{right_hand_traffic: false, straight_max_deg: 30, step_m: 0.25}"));
+  EXPECT_FALSE(o.right_hand_traffic);
+  EXPECT_EQ(o.straight_max_deg, 30.0);
+  EXPECT_EQ(o.curve.step_m, 0.25);
+  EXPECT_THROW(IntersectionOptions::fromYaml(YAML::Load("{bogus: 1}")), lanemap::intersections::IntersectionsError);
+  EXPECT_THROW(IntersectionOptions::fromYaml(YAML::Load("{straight_max_deg: 120}")), lanemap::intersections::IntersectionsError);
+  const auto file = IntersectionOptions::fromYaml(YAML::LoadFile(std::string(LANEMAP_DATA_DIR) + "/../config/intersections.yaml"));
+  EXPECT_TRUE(file.right_hand_traffic);
+}
+
+// ------------------------------------------------------------------ geometry
+
+double angleBetween(const Vector2d& a, const Vector2d& b) {
+  return std::abs(std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b)));
+}
+
+void checkGeometry(bool right_hand) {
+  const lanemap::osm::Tags two{{"lanes", "4"}};
+  Net net = crossing(two, two, two, two);
+  const auto sk = net.build();
+  std::map<int64_t, lanemap::map::LaneMap> roads;
+  for (const auto& r : sk.roads()) {
+    LaneSpec spec;
+    spec.lanes = 2;
+    spec.right_hand = right_hand;
+    roads[r.id] = roadLanes(sk, r, spec);
+  }
+  IntersectionOptions o;
+  o.right_hand_traffic = right_hand;
+  o.curve.step_m = 0.2;
+  const auto res = buildIntersection(sk, 1, roads, o);
+  ASSERT_EQ(res.connections.size(), 16u);
+  const auto roadLanelet = [&](int64_t road, int64_t id) -> const lanemap::map::Lanelet& {
+    return *roads.at(road).lanelet(id);
+  };
+  for (const auto& c : res.connections) {
+    SCOPED_TRACE("connection lanelet " + std::to_string(c.lanelet_id));
+    const auto* ll = res.map.lanelet(c.lanelet_id);
+    ASSERT_NE(ll, nullptr);
+    EXPECT_EQ(ll->kind, lanemap::map::LaneletKind::kIntersection);
+    EXPECT_EQ(ll->intersection_id, 1);
+    EXPECT_EQ(ll->successors, std::vector<int64_t>{c.out_lanelet});
+    const auto& in = roadLanelet(c.in_road, c.in_lanelet);
+    const auto& out = roadLanelet(c.out_road, c.out_lanelet);
+    // Ends coincide exactly with the lanes' ends, bounds with the bounds' ends.
+    EXPECT_EQ(ll->centre.front(), in.centre.back());
+    EXPECT_EQ(ll->centre.back(), out.centre.front());
+    const auto* l = res.map.line(ll->left_id);
+    const auto* r = res.map.line(ll->right_id);
+    ASSERT_TRUE(l && r);
+    EXPECT_EQ(l->type, lanemap::map::LineType::kVirtual);
+    EXPECT_EQ(r->type, lanemap::map::LineType::kVirtual);
+    EXPECT_EQ(l->points.front(), roads.at(c.in_road).line(in.left_id)->points.back());
+    EXPECT_EQ(r->points.front(), roads.at(c.in_road).line(in.right_id)->points.back());
+    EXPECT_EQ(l->points.back(), roads.at(c.out_road).line(out.left_id)->points.front());
+    EXPECT_EQ(r->points.back(), roads.at(c.out_road).line(out.right_id)->points.front());
+    // Tangent continuity (the curve's samples are 0.5 m or less apart).
+    std::vector<Vector2d> c2, l2, r2;
+    for (const auto& p : ll->centre) c2.push_back(p.head<2>());
+    for (const auto& p : l->points) l2.push_back(p.head<2>());
+    for (const auto& p : r->points) r2.push_back(p.head<2>());
+    const Vector2d t_in = (in.centre.back() - in.centre[in.centre.size() - 2]).head<2>();
+    const Vector2d t_out = (out.centre[1] - out.centre.front()).head<2>();
+    EXPECT_LT(angleBetween(c2[1] - c2[0], t_in), 2.0 * M_PI / 180.0);
+    EXPECT_LT(angleBetween(c2.back() - c2[c2.size() - 2], t_out), 2.0 * M_PI / 180.0);
+    // Sampled densely enough and simple.
+    for (size_t k = 1; k < c2.size(); ++k) EXPECT_LE((c2[k] - c2[k - 1]).norm(), 0.25);
+    EXPECT_FALSE(lanemap::intersections::selfIntersects(c2));
+    EXPECT_FALSE(lanemap::intersections::selfIntersects(l2));
+    EXPECT_FALSE(lanemap::intersections::selfIntersects(r2));
+    // Left bound left of the centre, right bound right of it, 3.5 m apart throughout.
+    for (size_t k = 1; k + 1 < c2.size(); ++k) {
+      const Vector2d t = c2[k + 1] - c2[k - 1];
+      const auto side = [&](const Vector2d& p) { return t.x() * (p - c2[k]).y() - t.y() * (p - c2[k]).x(); };
+      EXPECT_GT(side(l2[k]), 0.0);
+      EXPECT_LT(side(r2[k]), 0.0);
+      EXPECT_NEAR((l2[k] - r2[k]).norm(), 3.5, 0.05);
+    }
+    // Turns are quadratic Beziers; straight connections (parallel tangents) the cubic fallback.
+    EXPECT_EQ(c.quadratic, c.turn != TurnDirection::kStraight);
+    EXPECT_EQ(ll->turn, c.turn);
+  }
+}
+
+TEST(IntersectionGeometry, IntersectionLaneletsJoinTheLanesSmoothly) { checkGeometry(true); }
+TEST(IntersectionGeometry, IntersectionLaneletsJoinTheLanesSmoothlyLeftHand) { checkGeometry(false); }
+
+TEST(IntersectionGeometry, Lanelet2RoundTripRecoversSuccessorsFromSharedPoints) {
+  const lanemap::osm::Tags two{{"lanes", "4"}};
+  Net net = crossing(two, two, two, two);
+  const auto sk = net.build();
+  std::map<int64_t, lanemap::map::LaneMap> roads;
+  for (const auto& r : sk.roads()) roads[r.id] = roadLanes(sk, r, {2});
+  const auto res = buildIntersection(sk, 1, roads);
+  lanemap::map::LaneMap whole;
+  whole.origin_lat = sk.frame().origin().lat;
+  whole.origin_lon = sk.frame().origin().lon;
+  for (const auto& [id, m] : roads) {
+    whole.lines.insert(whole.lines.end(), m.lines.begin(), m.lines.end());
+    whole.lanelets.insert(whole.lanelets.end(), m.lanelets.begin(), m.lanelets.end());
+  }
+  lanemap::intersections::appendIntersection(whole, res);
+  lanemap::intersections::appendIntersection(whole, res);  // replacing: no duplicates
+  EXPECT_EQ(whole.lanelets.size(), 16u + 8u * 2u);
+  lanemap::testing::TempDir dir("intersections");
+  const std::string path = dir.str("map.osm");
+  lanemap::io::writeLanelet2(whole, path);  // orientation checked by the writer
+  const auto back = lanemap::io::readLanelet2(path, whole.origin_lat, whole.origin_lon);
+  ASSERT_EQ(back.lanelets.size(), whole.lanelets.size());
+  for (const auto& c : res.connections) {
+    const auto* in = back.lanelet(c.in_lanelet);
+    const auto* x = back.lanelet(c.lanelet_id);
+    ASSERT_TRUE(in && x);
+    EXPECT_NE(std::find(in->successors.begin(), in->successors.end(), c.lanelet_id), in->successors.end());
+    EXPECT_EQ(x->successors, std::vector<int64_t>{c.out_lanelet});
+    EXPECT_EQ(x->kind, lanemap::map::LaneletKind::kIntersection);
+    EXPECT_EQ(x->turn, c.turn);
+  }
+  // Each in-lane has as many intersection successors as connections leave it.
+  std::map<int64_t, size_t> leaving;
+  for (const auto& c : res.connections) ++leaving[c.in_lanelet];
+  for (const auto& [id, n] : leaving) EXPECT_EQ(back.lanelet(id)->successors.size(), n);
+}
+
+}  // namespace

@@ -26,6 +26,17 @@ echo "== mapping the drive (lanemap-offline, oracle labels SEMANTIC_FRONT_TRUTH)
 echo "== scores on the roads the drive mapped (lanemap-eval --mapped-roads-only)"
 "$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/map/map.osm" --mapped-roads-only --json "$out/map/eval.json"
 
+echo "== the live graph: lcm-logplayer at 1x -> road_tracker -> bev_builder -> lane_mapper over LCM"
+echo "   (lanemap-launch config/launch/demo.yaml, inside a private network namespace; about 70 s)"
+abs_out=$(cd "$out" && pwd)
+unshare -rn sh -c 'ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
+  "$bin/lanemap-launch" config/launch/demo.yaml --all-hosts --set drive="$abs_out/drive" \
+  --set store="$abs_out/live" --log-dir "$abs_out/live/logs" --status-interval 0 | tail -n 7
+cp "$out/live/lane_map.osm" "$out/live/map.osm"
+echo "== live map vs the truth, and vs the offline map"
+"$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/live/map.osm" --mapped-roads-only --json "$out/live/eval.json"
+"$bin/lanemap-eval" --truth "$out/map/map.osm" --map "$out/live/map.osm" --json "$out/live/vs_offline.json" | grep -E "^lanes|precision"
+
 cat <<EOT
 
 Demo output in $out/:
@@ -37,5 +48,6 @@ Demo output in $out/:
   drive/scenario.json               route, seed, options, counts
   map/map.osm, map.geojson, map.png the lane map built from the drive (Lanelet2, GeoJSON, picture)
   map/eval.json                     its scores against drive/groundtruth.osm
+  live/map.osm, live/eval.json      the same drive mapped by the live process graph over LCM
 Map data (c) OpenStreetMap contributors, ODbL.
 EOT

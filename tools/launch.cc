@@ -33,6 +33,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -58,6 +59,9 @@ struct Spec {
   int max_restarts = -1;  // -1: unlimited
   double stop_timeout_s = 5.0;
   double start_delay_s = 0.0;
+  // When this process ends for good, stop the whole launch this many seconds later (a log player
+  // whose end is the end of the job; like roslaunch's required). < 0: no.
+  double stop_launch_after_s = -1.0;
   std::map<std::string, std::string> env;
   std::string resolved;  // the command line run by /bin/sh
 };
@@ -184,7 +188,7 @@ Launch loadLaunch(const std::string& path, const std::map<std::string, std::stri
     s.name = n["name"].as<std::string>();
     const std::string where = path + ": process " + s.name;
     checkKeys(n, {"name", "host", "command", "config", "restart", "restart_delay_s", "max_restart_delay_s",
-                  "max_restarts", "stop_timeout_s", "start_delay_s", "env"},
+                  "max_restarts", "stop_timeout_s", "start_delay_s", "stop_launch_after_s", "env"},
               where);
     if (!names.insert(s.name).second) throw std::runtime_error(where + ": name used twice");
     s.host = n["host"].as<std::string>();
@@ -199,6 +203,7 @@ Launch loadLaunch(const std::string& path, const std::map<std::string, std::stri
     if (n["max_restarts"]) s.max_restarts = n["max_restarts"].as<int>();
     if (n["stop_timeout_s"]) s.stop_timeout_s = n["stop_timeout_s"].as<double>();
     if (n["start_delay_s"]) s.start_delay_s = n["start_delay_s"].as<double>();
+    if (n["stop_launch_after_s"]) s.stop_launch_after_s = n["stop_launch_after_s"].as<double>();
     if (n["env"]) {
       for (const auto& kv : n["env"]) s.env[kv.first.as<std::string>()] = substitute(kv.second.as<std::string>(), vars, where);
     }
@@ -234,6 +239,7 @@ struct Proc {
   bool failed_for_good = false;
 };
 
+
 class Launcher {
  public:
   Launcher(Launch launch, std::vector<Spec> mine, std::string log_dir, double status_interval_s)
@@ -257,8 +263,18 @@ class Launcher {
       for (auto& p : procs_) {
         if (p.pid < 0 && !p.done && now >= p.next_start) spawn(p);
         if (!p.done) active = true;
+        if (p.done && p.spec.stop_launch_after_s >= 0 && !stop_at_) {
+          stop_at_ = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(p.spec.stop_launch_after_s));
+          log(p.spec.name + " ended: stopping the launch in " + std::to_string(p.spec.stop_launch_after_s) + " s");
+        }
       }
       if (!active) break;
+      if (stop_at_ && now >= *stop_at_) {
+        stopAll();
+        printStatus();
+        log("stopped after " + std::string("the end of a process with stop_launch_after_s"));
+        return 0;
+      }
       if (status_interval_s_ > 0 && now >= next_status) {
         printStatus();
         next_status = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(status_interval_s_));
@@ -438,6 +454,7 @@ class Launcher {
   std::string log_dir_;
   double status_interval_s_;
   std::vector<Proc> procs_;
+  std::optional<Clock::time_point> stop_at_;
 };
 
 std::string binDir() {

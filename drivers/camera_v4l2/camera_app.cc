@@ -13,12 +13,7 @@ namespace {
 
 template <typename T>
 void readKey(const YAML::Node& config, const char* key, T& value) {
-  if (!config[key]) return;
-  try {
-    value = config[key].as<T>();
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(std::string("camera_v4l2 config key '") + key + "': " + e.what());
-  }
+  readConfigKey(config, key, value, "camera_v4l2");
 }
 
 }  // namespace

@@ -17,12 +17,7 @@ namespace {
 
 template <typename T>
 void readKey(const YAML::Node& config, const char* key, T& value) {
-  if (!config[key]) return;
-  try {
-    value = config[key].as<T>();
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(std::string("lidar_vlp16 config key '") + key + "': " + e.what());
-  }
+  readConfigKey(config, key, value, "lidar_vlp16");
 }
 
 constexpr int kPositionPacketSize = 512;  // VLP-16 position (GPS/PPS) packet payload

@@ -16,12 +16,7 @@ namespace {
 
 template <typename T>
 void readKey(const YAML::Node& config, const char* key, T& value) {
-  if (!config[key]) return;
-  try {
-    value = config[key].as<T>();
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(std::string("pose_nmea config key '") + key + "': " + e.what());
-  }
+  readConfigKey(config, key, value, "pose_nmea");
 }
 
 void checkKeys(const YAML::Node& node, const std::set<std::string>& known,

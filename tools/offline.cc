@@ -193,6 +193,11 @@ int main(int argc, char** argv) {
     io::writeGeoJson(map, (fs::path(o.out) / "map.geojson").string());
     io::MapPngOptions png;
     png.background_polylines = io::skeletonPolylines(sk);
+    Eigen::AlignedBox2d extent;  // the mapped lanes and 40 m around them, over the OSM roads
+    for (const auto& l : map.lines) {
+      for (const auto& p : l.points) extent.extend(p.head<2>());
+    }
+    png.bbox = Eigen::AlignedBox2d(extent.min() - Eigen::Vector2d(40, 40), extent.max() + Eigen::Vector2d(40, 40));
     io::writeMapPng(map, (fs::path(o.out) / "map.png").string(), png);
     const auto s = mapper.builder().stats();
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -31,3 +31,7 @@ echo "== BEV builder: projection and mesh"
 echo "== BEV builder: memory, 30 s drive vs 120 s drive"
 "$bin/lanemap-bench-bev" --memory 30
 "$bin/lanemap-bench-bev" --memory 120
+
+# Issue 7: the segmenter's frames/s at the camera resolution (640x360), OpenCV on 1 and 2 threads.
+echo "== segmenter: shipped model on 640x360 frames"
+"$bin/lanemap-bench-seg"

@@ -1,0 +1,292 @@
+#include "core/seg/segmenter.h"
+
+#include <opencv2/dnn.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+
+namespace lanemap::seg {
+
+namespace {
+
+constexpr int kLanemapClasses = 11;
+
+template <typename T>
+T get(const YAML::Node& node, const char* key, T fallback) {
+  if (!node[key]) return fallback;
+  try {
+    return node[key].as<T>();
+  } catch (const YAML::Exception& e) {
+    throw ModelError(std::string("model config: key '") + key + "': " + e.what());
+  }
+}
+
+std::array<double, 3> triple(const YAML::Node& node, const char* key, std::array<double, 3> fallback) {
+  if (!node[key]) return fallback;
+  const YAML::Node v = node[key];
+  if (v.IsScalar()) {
+    const double x = get<double>(node, key, 0.0);
+    return {x, x, x};
+  }
+  if (!v.IsSequence() || v.size() != 3) throw ModelError(std::string("model config: '") + key + "' must be 3 numbers");
+  std::array<double, 3> out{};
+  for (size_t i = 0; i < 3; ++i) out[i] = v[i].as<double>();
+  return out;
+}
+
+}  // namespace
+
+ModelConfig ModelConfig::fromYaml(const YAML::Node& node, const std::string& base_dir) {
+  if (!node || !node.IsMap()) throw ModelError("model config: expected a map with at least 'path'");
+  static const char* kKeys[] = {"path", "name", "input_width", "input_height", "rgb", "scale", "mean",
+                                "std", "output", "class_map", "upsample"};
+  for (const auto& kv : node) {
+    const std::string k = kv.first.as<std::string>();
+    bool known = false;
+    for (const char* key : kKeys) known = known || k == key;
+    if (!known) throw ModelError("model config: unknown key '" + k + "'");
+  }
+  ModelConfig c;
+  c.path = get<std::string>(node, "path", "");
+  if (c.path.empty()) throw ModelError("model config: 'path' (the ONNX file) is required");
+  if (!base_dir.empty() && fs::path(c.path).is_relative() && !fs::exists(c.path) &&
+      fs::exists(fs::path(base_dir) / c.path)) {
+    c.path = (fs::path(base_dir) / c.path).lexically_normal().string();
+  }
+  c.name = get<std::string>(node, "name", fs::path(c.path).stem().string());
+  c.input_width = get<int>(node, "input_width", c.input_width);
+  c.input_height = get<int>(node, "input_height", c.input_height);
+  if (c.input_width < 8 || c.input_height < 8 || c.input_width > 8192 || c.input_height > 8192)
+    throw ModelError("model config: input_width/input_height must be in [8, 8192]");
+  c.rgb = get<bool>(node, "rgb", c.rgb);
+  c.scale = get<double>(node, "scale", c.scale);
+  c.mean = triple(node, "mean", c.mean);
+  c.std = triple(node, "std", c.std);
+  for (double s : c.std)
+    if (!(std::abs(s) > 1e-12)) throw ModelError("model config: 'std' entries must be non-zero");
+  const std::string output = get<std::string>(node, "output", "scores");
+  if (output == "scores") c.output = Output::kScores;
+  else if (output == "labels") c.output = Output::kLabels;
+  else throw ModelError("model config: 'output' must be scores or labels, not '" + output + "'");
+  if (node["class_map"]) {
+    if (!node["class_map"].IsSequence()) throw ModelError("model config: 'class_map' must be a list of class ids");
+    for (const auto& v : node["class_map"]) c.class_map.push_back(v.as<int>());
+    if (c.class_map.empty() || c.class_map.size() > 256) throw ModelError("model config: 'class_map' must have 1..256 entries");
+  }
+  const std::string up = get<std::string>(node, "upsample", "scores");
+  if (up == "scores") c.upsample_scores = true;
+  else if (up == "labels") c.upsample_scores = false;
+  else throw ModelError("model config: 'upsample' must be scores or labels, not '" + up + "'");
+  return c;
+}
+
+struct Segmenter::Impl {
+  cv::dnn::Net net;
+  cv::Mat blob;
+};
+
+Segmenter::Segmenter(const ModelConfig& config) : config_(config), impl_(std::make_unique<Impl>()) {
+  if (config_.name.empty()) config_.name = fs::path(config_.path).stem().string();
+  std::error_code ec;
+  if (config_.path.empty()) throw ModelError("segmentation model: no model path given");
+  if (!fs::exists(config_.path, ec)) throw ModelError("segmentation model '" + config_.path + "' does not exist");
+  if (!fs::is_regular_file(config_.path, ec) || fs::file_size(config_.path, ec) == 0)
+    throw ModelError("segmentation model '" + config_.path + "' is not a regular, non-empty file");
+  try {
+    impl_->net = cv::dnn::readNetFromONNX(config_.path);
+  } catch (const cv::Exception& e) {
+    throw ModelError("segmentation model '" + config_.path + "' is not an ONNX model OpenCV can load: " + e.what());
+  }
+  if (impl_->net.empty()) throw ModelError("segmentation model '" + config_.path + "' is not an ONNX model (empty network)");
+  impl_->net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  impl_->net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+
+  // One forward pass on a grey frame: the output must be 4-D (scores) or hold one id per pixel.
+  cv::Mat out;
+  try {
+    cv::Mat probe(config_.input_height, config_.input_width, CV_8UC3, cv::Scalar(128, 128, 128));
+    cv::Mat blob;
+    cv::dnn::blobFromImage(probe, 1.0, cv::Size(), cv::Scalar(), false, false, CV_32F).copyTo(blob);
+    impl_->net.setInput(blob);
+    out = impl_->net.forward();
+  } catch (const cv::Exception& e) {
+    throw ModelError("segmentation model '" + config_.path + "' fails on a " + std::to_string(config_.input_width) +
+                     "x" + std::to_string(config_.input_height) + " input: " + e.what());
+  }
+  if (config_.output == ModelConfig::Output::kScores) {
+    if (out.dims != 4 || out.size[0] != 1)
+      throw ModelError("segmentation model '" + config_.path + "': expected scores N x C x H x W, got a " +
+                       std::to_string(out.dims) + "-D output");
+    model_classes_ = out.size[1];
+    const size_t want = config_.class_map.empty() ? kLanemapClasses : config_.class_map.size();
+    if (static_cast<size_t>(model_classes_) != want)
+      throw ModelError("segmentation model '" + config_.path + "' outputs " + std::to_string(model_classes_) +
+                       " classes but the config maps " + std::to_string(want) + " (set class_map)");
+  } else {
+    model_classes_ = config_.class_map.empty() ? kLanemapClasses : static_cast<int>(config_.class_map.size());
+    const size_t total = out.total();
+    const int h = out.size[out.dims - 2], w = out.size[out.dims - 1];
+    if (out.dims < 2 || total != static_cast<size_t>(h) * w)
+      throw ModelError("segmentation model '" + config_.path + "': expected one class id per pixel (N x H x W)");
+  }
+  map_.fill(0);
+  for (int i = 0; i < 256; ++i) {
+    int c = i;
+    if (!config_.class_map.empty()) c = i < static_cast<int>(config_.class_map.size()) ? config_.class_map[i] : 0;
+    map_[i] = static_cast<uint8_t>(c >= 0 && c < kLanemapClasses ? c : 0);
+  }
+}
+
+Segmenter::~Segmenter() = default;
+
+cv::Mat Segmenter::segment(const cv::Mat& bgr) {
+  if (bgr.empty() || bgr.type() != CV_8UC3) throw FrameError("segment: need a BGR CV_8UC3 image");
+  const int W = config_.input_width, H = config_.input_height;
+  cv::Mat resized;
+  const bool shrink = bgr.cols >= W && bgr.rows >= H;
+  cv::resize(bgr, resized, cv::Size(W, H), 0, 0, shrink ? cv::INTER_AREA : cv::INTER_LINEAR);
+  if (config_.rgb) cv::cvtColor(resized, resized, cv::COLOR_BGR2RGB);
+  // NCHW blob with (pixel * scale - mean) / std per channel.
+  const int sizes[4] = {1, 3, H, W};
+  impl_->blob.create(4, sizes, CV_32F);
+  cv::Mat planes[3];
+  for (int c = 0; c < 3; ++c) planes[c] = cv::Mat(H, W, CV_32F, impl_->blob.ptr<float>(0, c));
+  cv::Mat split[3];
+  cv::split(resized, split);
+  for (int c = 0; c < 3; ++c) {
+    const double a = config_.scale / config_.std[c], b = -config_.mean[c] / config_.std[c];
+    split[c].convertTo(planes[c], CV_32F, a, b);
+  }
+  impl_->net.setInput(impl_->blob);
+  cv::Mat out = impl_->net.forward();
+
+  const cv::Size frame = bgr.size();
+  cv::Mat labels(frame, CV_8UC1);
+  if (config_.output == ModelConfig::Output::kLabels) {
+    const int h = out.size[out.dims - 2], w = out.size[out.dims - 1];
+    cv::Mat ids(h, w, out.type(), out.data);
+    cv::Mat ids8;
+    ids.convertTo(ids8, CV_8U);  // ids 0..255, rounded
+    cv::resize(ids8, labels, frame, 0, 0, cv::INTER_NEAREST);
+    labels.forEach<uint8_t>([this](uint8_t& v, const int*) { v = map_[v]; });
+    return labels;
+  }
+  const int C = out.size[1], h = out.size[2], w = out.size[3];
+  if (config_.upsample_scores && (h != frame.height || w != frame.width)) {
+    std::vector<cv::Mat> up(static_cast<size_t>(C));
+    for (int c = 0; c < C; ++c) {
+      cv::Mat plane(h, w, CV_32F, out.ptr<float>(0, c));
+      cv::resize(plane, up[static_cast<size_t>(c)], frame, 0, 0, cv::INTER_LINEAR);
+    }
+    for (int r = 0; r < frame.height; ++r) {
+      uint8_t* dst = labels.ptr<uint8_t>(r);
+      const float* p0 = up[0].ptr<float>(r);
+      std::vector<const float*> rows(static_cast<size_t>(C));
+      for (int c = 0; c < C; ++c) rows[static_cast<size_t>(c)] = up[static_cast<size_t>(c)].ptr<float>(r);
+      for (int x = 0; x < frame.width; ++x) {
+        float best = p0[x];
+        int arg = 0;
+        for (int c = 1; c < C; ++c) {
+          const float v = rows[static_cast<size_t>(c)][x];
+          if (v > best) {
+            best = v;
+            arg = c;
+          }
+        }
+        dst[x] = map_[static_cast<size_t>(arg)];
+      }
+    }
+    return labels;
+  }
+  cv::Mat small(h, w, CV_8UC1);
+  const size_t plane = static_cast<size_t>(h) * w;
+  const float* base = out.ptr<float>();
+  for (size_t i = 0; i < plane; ++i) {
+    float best = base[i];
+    int arg = 0;
+    for (int c = 1; c < C; ++c) {
+      const float v = base[static_cast<size_t>(c) * plane + i];
+      if (v > best) {
+        best = v;
+        arg = c;
+      }
+    }
+    small.data[i] = map_[static_cast<size_t>(arg)];
+  }
+  if (small.size() == frame) return small;
+  cv::resize(small, labels, frame, 0, 0, cv::INTER_NEAREST);
+  return labels;
+}
+
+cv::Mat decodeFrame(int32_t pixelformat, int width, int height, int row_stride, const uint8_t* data, size_t size) {
+  if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
+    throw FrameError("frame: bad size " + std::to_string(width) + "x" + std::to_string(height));
+  if (data == nullptr || size == 0) throw FrameError("frame: no image data");
+  cv::Mat bgr;
+  switch (pixelformat) {
+    case kPixelJpeg:
+    case kPixelMjpeg: {
+      const cv::Mat buf(1, static_cast<int>(size), CV_8UC1, const_cast<uint8_t*>(data));
+      try {
+        bgr = cv::imdecode(buf, cv::IMREAD_COLOR);
+      } catch (const cv::Exception& e) {
+        throw FrameError(std::string("frame: corrupt JPEG: ") + e.what());
+      }
+      if (bgr.empty()) throw FrameError("frame: corrupt JPEG (" + std::to_string(size) + " bytes do not decode)");
+      if (bgr.cols != width || bgr.rows != height)
+        throw FrameError("frame: JPEG is " + std::to_string(bgr.cols) + "x" + std::to_string(bgr.rows) +
+                         " but the message says " + std::to_string(width) + "x" + std::to_string(height));
+      return bgr;
+    }
+    case kPixelBgr:
+    case kPixelRgb:
+    case kPixelGray:
+    case kPixelYuyv: {
+      const int bpp = pixelformat == kPixelGray ? 1 : pixelformat == kPixelYuyv ? 2 : 3;
+      const size_t stride = row_stride > 0 ? static_cast<size_t>(row_stride) : static_cast<size_t>(width) * bpp;
+      if (stride < static_cast<size_t>(width) * bpp || size < stride * (height - 1) + static_cast<size_t>(width) * bpp)
+        throw FrameError("frame: raw buffer of " + std::to_string(size) + " bytes is too short for " +
+                         std::to_string(width) + "x" + std::to_string(height));
+      const cv::Mat raw(height, width, bpp == 1 ? CV_8UC1 : bpp == 2 ? CV_8UC2 : CV_8UC3, const_cast<uint8_t*>(data), stride);
+      if (pixelformat == kPixelBgr) raw.copyTo(bgr);
+      else if (pixelformat == kPixelRgb) cv::cvtColor(raw, bgr, cv::COLOR_RGB2BGR);
+      else if (pixelformat == kPixelGray) cv::cvtColor(raw, bgr, cv::COLOR_GRAY2BGR);
+      else cv::cvtColor(raw, bgr, cv::COLOR_YUV2BGR_YUYV);
+      return bgr;
+    }
+    default: {
+      char code[5] = {static_cast<char>(pixelformat & 0xff), static_cast<char>((pixelformat >> 8) & 0xff),
+                      static_cast<char>((pixelformat >> 16) & 0xff), static_cast<char>((pixelformat >> 24) & 0xff), 0};
+      for (char& ch : code)
+        if (ch != 0 && (ch < 32 || ch > 126)) ch = '?';
+      throw FrameError(std::string("frame: unsupported pixel format '") + code + "'");
+    }
+  }
+}
+
+std::vector<uint8_t> encodeLabelsPng(const cv::Mat& labels) {
+  std::vector<uint8_t> png;
+  cv::imencode(".png", labels, png, {cv::IMWRITE_PNG_COMPRESSION, 3});
+  return png;
+}
+
+cv::Mat decodeLabels(int8_t encoding, int width, int height, const std::vector<uint8_t>& data) {
+  if (width <= 0 || height <= 0) throw FrameError("labels: bad size");
+  if (encoding == 0) {
+    if (data.size() != static_cast<size_t>(width) * height) throw FrameError("labels: raw size does not match");
+    return cv::Mat(height, width, CV_8UC1, const_cast<uint8_t*>(data.data())).clone();
+  }
+  if (encoding != 1) throw FrameError("labels: unknown encoding " + std::to_string(encoding));
+  cv::Mat m = cv::imdecode(data, cv::IMREAD_UNCHANGED);
+  if (m.empty() || m.type() != CV_8UC1 || m.cols != width || m.rows != height)
+    throw FrameError("labels: PNG does not decode to a " + std::to_string(width) + "x" + std::to_string(height) + " class image");
+  return m;
+}
+
+}  // namespace lanemap::seg

@@ -1,0 +1,282 @@
+// lanemap-segmenter: semantic segmentation of the front camera (METHOD.md section 2). Subscribes
+// CAMERA_FRONT (JPEG or raw image_t), runs an ONNX model through OpenCV DNN (core/seg/segmenter.h:
+// input size, normalisation and class mapping from the config, so any segmentation model fits)
+// and publishes SEMANTIC_FRONT (label_image_t, PNG or RAW) with the source frame's utime and seq.
+//
+// Frames go through a bounded queue (1-2 frames) to one worker thread; when the model is slower
+// than the camera the OLDEST waiting frame is dropped (frames_dropped in STATUS), so the labels
+// stay current and memory stays flat. Corrupt or wrong-size frames are counted and skipped. A
+// missing or non-ONNX model is an error at start (exit code 2).
+//
+// --oracle republishes the simulator's SEMANTIC_FRONT_TRUTH as SEMANTIC_FRONT (ablations: the
+// pipeline on perfect labels); no model is loaded.
+//
+//   lanemap-segmenter --config config/segmenter.yaml [--model FILE.onnx] [--oracle]
+//
+// Offline (no LCM traffic): --log-in drive.lcmlog --log-out out.lcmlog copies every event of the
+// log and adds, after each CAMERA_FRONT frame, its SEMANTIC_FRONT (every frame, none dropped), so
+// lanemap-offline can map a recorded drive on the model's labels.
+#include "core/seg/segmenter.h"
+#include "lanemap/image_t.hpp"
+#include "lanemap/label_image_t.hpp"
+#include "processes/framework/channels.h"
+#include "processes/framework/process.h"
+#include "processes/segmenter/frame_queue.h"
+
+#include <opencv2/core.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <thread>
+
+namespace {
+
+using namespace lanemap;
+
+template <typename T>
+void read(const YAML::Node& node, const char* key, T& value) {
+  if (node && node[key]) value = node[key].as<T>();
+}
+
+struct Settings {
+  std::string camera_channel = channels::kCameraFront;
+  std::string output_channel = channels::kSemanticFront;
+  std::string truth_channel = channels::kSemanticFrontTruth;
+  bool raw = false;            // encoding: raw (else png)
+  int queue_frames = 1;
+  int expect_width = 0, expect_height = 0;
+  int lcm_queue = 30;
+  int debug_delay_ms = 0;
+};
+
+// Model mode: camera frames -> queue -> worker (decode, segment, publish).
+class SegmenterApp {
+ public:
+  SegmenterApp(Process& process, const Settings& s, std::unique_ptr<seg::Segmenter> model)
+      : process_(process), s_(s), model_(std::move(model)), queue_(static_cast<size_t>(s.queue_frames)) {
+    auto* sub = process_.lcm().subscribe(s_.camera_channel, &SegmenterApp::onImage, this);
+    sub->setQueueCapacity(s_.lcm_queue);
+    for (const char* c : {"frames_received", "frames_dropped", "frames_corrupt", "frames_wrong_size",
+                          "frames_segmented", "labels_published"})
+      process_.counters().set(c, 0);
+    worker_ = std::thread([this] { run(); });
+  }
+  ~SegmenterApp() {
+    stop_ = true;
+    queue_.close();
+    if (worker_.joinable()) worker_.join();
+  }
+
+ private:
+  void onImage(const lcm::ReceiveBuffer*, const std::string&, const image_t* msg) {
+    auto& c = process_.counters();
+    c.add("frames_received");
+    const size_t dropped = queue_.push(*msg);
+    if (dropped) c.add("frames_dropped", static_cast<int64_t>(dropped));
+    c.set("queue_max_depth", static_cast<int64_t>(queue_.maxDepth()));
+  }
+
+  void run() {
+    auto& c = process_.counters();
+    double ms_sum = 0.0;
+    int64_t n = 0;
+    while (!stop_) {
+      std::optional<image_t> msg = queue_.pop(std::chrono::milliseconds(100));
+      if (!msg) continue;
+      const auto t0 = std::chrono::steady_clock::now();
+      cv::Mat bgr;
+      try {
+        if ((s_.expect_width > 0 && msg->width != s_.expect_width) ||
+            (s_.expect_height > 0 && msg->height != s_.expect_height)) {
+          throw seg::FrameError("frame is " + std::to_string(msg->width) + "x" + std::to_string(msg->height) +
+                                ", expected " + std::to_string(s_.expect_width) + "x" + std::to_string(s_.expect_height));
+        }
+        bgr = seg::decodeFrame(msg->pixelformat, msg->width, msg->height, msg->row_stride, msg->data.data(),
+                               msg->data.size());
+      } catch (const seg::FrameError& e) {
+        const std::string what = e.what();
+        const bool size = what.find("expected") != std::string::npos || what.find("message says") != std::string::npos;
+        c.add(size ? "frames_wrong_size" : "frames_corrupt");
+        if (warnings_++ < 10) std::cerr << "segmenter: frame seq " << msg->seq << " skipped: " << what << "\n";
+        continue;
+      }
+      cv::Mat labels;
+      try {
+        labels = model_->segment(bgr);
+      } catch (const std::exception& e) {
+        c.add("frames_failed");
+        if (warnings_++ < 10) std::cerr << "segmenter: frame seq " << msg->seq << " failed: " << e.what() << "\n";
+        continue;
+      }
+      if (s_.debug_delay_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(s_.debug_delay_ms));
+      c.add("frames_segmented");
+      label_image_t out;
+      out.utime = msg->utime;
+      out.seq = msg->seq;
+      out.width = labels.cols;
+      out.height = labels.rows;
+      if (s_.raw) {
+        out.encoding = label_image_t::ENCODING_RAW;
+        out.data.assign(labels.data, labels.data + labels.total());
+      } else {
+        out.encoding = label_image_t::ENCODING_PNG;
+        out.data = seg::encodeLabelsPng(labels);
+      }
+      out.size = static_cast<int32_t>(out.data.size());
+      out.source = model_->name();
+      process_.lcm().publish(s_.output_channel, &out);
+      c.add("labels_published");
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      ms_sum += ms;
+      ++n;
+      c.set("segment_ms_last", static_cast<int64_t>(ms + 0.5));
+      c.set("segment_ms_mean", static_cast<int64_t>(ms_sum / n + 0.5));
+      process_.latency().add((nowUtime() - msg->utime) * 1e-3);
+    }
+  }
+
+  Process& process_;
+  Settings s_;
+  std::unique_ptr<seg::Segmenter> model_;
+  segmenter::DropOldestQueue<image_t> queue_;
+  std::atomic<bool> stop_{false};
+  int warnings_ = 0;
+  std::thread worker_;
+};
+
+// Oracle mode: SEMANTIC_FRONT_TRUTH -> SEMANTIC_FRONT, unchanged but for the channel.
+class OracleApp {
+ public:
+  OracleApp(Process& process, const Settings& s) : process_(process), s_(s) {
+    process_.lcm().subscribe(s_.truth_channel, &OracleApp::onTruth, this)->setQueueCapacity(s_.lcm_queue);
+    process_.counters().set("truth_received", 0);
+    process_.counters().set("labels_published", 0);
+  }
+
+ private:
+  void onTruth(const lcm::ReceiveBuffer*, const std::string&, const label_image_t* msg) {
+    process_.counters().add("truth_received");
+    process_.lcm().publish(s_.output_channel, msg);
+    process_.counters().add("labels_published");
+    process_.latency().add((nowUtime() - msg->utime) * 1e-3);
+  }
+  Process& process_;
+  Settings s_;
+};
+
+// Offline: every camera frame of a log segmented; returns the number of frames that failed.
+int64_t segmentLog(const std::string& in_path, const std::string& out_path, const Settings& s, seg::Segmenter& model) {
+  lcm::LogFile in(in_path, "r");
+  if (!in.good()) throw std::runtime_error("cannot read LCM log '" + in_path + "'");
+  lcm::LogFile out(out_path, "w");
+  if (!out.good()) throw std::runtime_error("cannot write LCM log '" + out_path + "'");
+  int64_t eventnum = 0, frames = 0, bad = 0;
+  std::vector<uint8_t> buf;
+  while (const lcm::LogEvent* ev = in.readNextEvent()) {
+    lcm::LogEvent copy = *ev;
+    copy.eventnum = eventnum++;
+    if (out.writeEvent(&copy) != 0) throw std::runtime_error("writing '" + out_path + "' failed");
+    if (ev->channel != s.camera_channel) continue;
+    image_t img;
+    if (img.decode(ev->data, 0, ev->datalen) < 0) {
+      ++bad;
+      continue;
+    }
+    cv::Mat labels;
+    try {
+      labels = model.segment(seg::decodeFrame(img.pixelformat, img.width, img.height, img.row_stride, img.data.data(),
+                                              img.data.size()));
+    } catch (const std::exception& e) {
+      if (bad++ < 10) std::cerr << "segmenter: frame seq " << img.seq << " skipped: " << e.what() << "\n";
+      continue;
+    }
+    label_image_t lab;
+    lab.utime = img.utime;
+    lab.seq = img.seq;
+    lab.width = labels.cols;
+    lab.height = labels.rows;
+    lab.encoding = s.raw ? label_image_t::ENCODING_RAW : label_image_t::ENCODING_PNG;
+    if (s.raw) lab.data.assign(labels.data, labels.data + labels.total());
+    else lab.data = seg::encodeLabelsPng(labels);
+    lab.size = static_cast<int32_t>(lab.data.size());
+    lab.source = model.name();
+    buf.resize(static_cast<size_t>(lab.getEncodedSize()));
+    lab.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    lcm::LogEvent le;
+    le.eventnum = eventnum++;
+    le.timestamp = ev->timestamp;
+    le.channel = s.output_channel;
+    le.datalen = static_cast<int32_t>(buf.size());
+    le.data = buf.data();
+    if (out.writeEvent(&le) != 0) throw std::runtime_error("writing '" + out_path + "' failed");
+    if (++frames % 100 == 0) std::cerr << "segmenter: " << frames << " frames\n";
+  }
+  std::cerr << "segmenter: " << frames << " frames segmented into " << out_path << ", " << bad << " skipped\n";
+  return bad;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Process process("segmenter");
+  bool oracle_flag = false;
+  std::string model_flag;
+  process.cli().add_flag("--oracle", oracle_flag, "republish SEMANTIC_FRONT_TRUTH as SEMANTIC_FRONT (no model)");
+  process.cli().add_option("--model", model_flag, "ONNX model (overrides model.path of the config)");
+  std::string log_in, log_out;
+  process.cli().add_option("--log-in", log_in, "offline: segment every CAMERA_FRONT frame of this LCM log ...");
+  process.cli().add_option("--log-out", log_out, "... into this copy of it (with SEMANTIC_FRONT added), then exit");
+  if (int rc = process.init(argc, argv); rc >= 0) return rc;
+  try {
+    const YAML::Node& config = process.config();
+    Settings s;
+    read(config, "camera_channel", s.camera_channel);
+    read(config, "output_channel", s.output_channel);
+    read(config, "truth_channel", s.truth_channel);
+    std::string encoding = "png";
+    read(config, "encoding", encoding);
+    if (encoding != "png" && encoding != "raw") throw std::runtime_error("encoding must be png or raw, not '" + encoding + "'");
+    s.raw = encoding == "raw";
+    read(config, "queue_frames", s.queue_frames);
+    if (s.queue_frames < 1 || s.queue_frames > 8) throw std::runtime_error("queue_frames must be 1..8");
+    read(config, "expect_width", s.expect_width);
+    read(config, "expect_height", s.expect_height);
+    read(config, "lcm_queue", s.lcm_queue);
+    read(config, "debug_delay_ms", s.debug_delay_ms);
+    bool oracle = oracle_flag;
+    if (!oracle) read(config, "oracle", oracle);
+    if (oracle) {
+      std::cerr << "segmenter: oracle mode: " << s.truth_channel << " -> " << s.output_channel << "\n";
+      OracleApp app(process, s);
+      process.setState("oracle");
+      return process.spin();
+    }
+    int threads = 0;
+    read(config, "threads", threads);
+    if (threads > 0) cv::setNumThreads(threads);
+    YAML::Node model_node = config["model"] ? YAML::Clone(config["model"]) : YAML::Node(YAML::NodeType::Map);
+    if (!model_flag.empty()) {
+      model_node["path"] = model_flag;
+      if (!config["model"] || !config["model"]["name"]) model_node.remove("name");
+    }
+    const seg::ModelConfig mc = seg::ModelConfig::fromYaml(model_node, LANEMAP_SOURCE_DIR);
+    auto model = std::make_unique<seg::Segmenter>(mc);
+    std::cerr << "segmenter: model " << mc.path << " (" << model->modelClasses() << " classes, input "
+              << mc.input_width << "x" << mc.input_height << "), " << s.camera_channel << " -> "
+              << s.output_channel << ", queue " << s.queue_frames << "\n";
+    if (!log_in.empty() || !log_out.empty()) {
+      if (log_in.empty() || log_out.empty()) throw std::runtime_error("--log-in and --log-out go together");
+      segmentLog(log_in, log_out, s, *model);
+      return 0;
+    }
+    SegmenterApp app(process, s, std::move(model));
+    process.setState("running");
+    return process.spin();
+  } catch (const std::exception& e) {
+    std::cerr << "segmenter: error: " << e.what() << "\n";
+    return 2;
+  }
+}

@@ -1,0 +1,79 @@
+#!/usr/bin/env /usr/bin/python3
+"""LaneSegNet: the small encoder-decoder lanemap ships for semantic segmentation (METHOD.md section 2).
+
+A U-Net-shaped network sized for a 2-core CPU (training and inference): four stride-2 stages
+(1/2 .. 1/16 of the input) of 3x3 conv + BatchNorm + ReLU, dilated convolutions at 1/16 for
+context (deciding ego / left / right lane needs the whole road width), and a decoder that
+upsamples by 2 (bilinear) and concatenates the encoder's skip features back up to 1/2 of the
+input resolution. Logits come out at half the input size (no full-resolution layers: on a CPU their
+memory traffic costs more than all the rest); the segmenter upsamples them (bilinear) to the
+camera frame before the per-pixel argmax, which keeps thin markings' edges sub-pixel.
+
+Only operations OpenCV's DNN importer (4.6) handles are used: Conv, BatchNormalization (folded
+at export), Relu, Resize (scale 2, bilinear, half-pixel), Concat.
+"""
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+NUM_CLASSES = 11
+
+
+class ConvBNReLU(nn.Sequential):
+    def __init__(self, cin, cout, stride=1, dilation=1, k=3):
+        pad = dilation * (k // 2)
+        super().__init__(
+            nn.Conv2d(cin, cout, k, stride=stride, padding=pad, dilation=dilation, bias=False),
+            nn.BatchNorm2d(cout),
+            nn.ReLU(inplace=True),
+        )
+
+
+class Up2(nn.Module):
+    def forward(self, x):
+        return F.interpolate(x, scale_factor=2.0, mode="bilinear", align_corners=False)
+
+
+class LaneSegNet(nn.Module):
+    def __init__(self, num_classes=NUM_CLASSES, width=(16, 32, 64, 96)):
+        super().__init__()
+        c1, c2, c3, c4 = width
+        self.enc1 = ConvBNReLU(3, c1, 2)                                        # 1/2
+        self.enc2 = nn.Sequential(ConvBNReLU(c1, c2, 2), ConvBNReLU(c2, c2))   # 1/4
+        self.enc3 = nn.Sequential(ConvBNReLU(c2, c3, 2), ConvBNReLU(c3, c3))   # 1/8
+        self.enc4 = nn.Sequential(ConvBNReLU(c3, c4, 2), ConvBNReLU(c4, c4, dilation=2),
+                                  ConvBNReLU(c4, c4, dilation=4))              # 1/16
+        self.up = Up2()
+        self.dec3 = ConvBNReLU(c4 + c3, c3)                                    # 1/8
+        self.dec2 = ConvBNReLU(c3 + c2, c2)                                    # 1/4
+        self.dec1 = ConvBNReLU(c2 + c1, 24)                                    # 1/2
+        self.head = nn.Conv2d(24, num_classes, 3, padding=1)                   # logits at 1/2
+
+    def forward(self, x):
+        e1 = self.enc1(x)
+        e2 = self.enc2(e1)
+        e3 = self.enc3(e2)
+        e4 = self.enc4(e3)
+        d3 = self.dec3(torch.cat([self.up(e4), e3], 1))
+        d2 = self.dec2(torch.cat([self.up(d3), e2], 1))
+        d1 = self.dec1(torch.cat([self.up(d2), e1], 1))
+        return self.head(d1)
+
+
+if __name__ == "__main__":
+    import sys
+    import time
+    torch.set_num_threads(int(sys.argv[1]) if len(sys.argv) > 1 else 2)
+    h, w = (int(sys.argv[2]), int(sys.argv[3])) if len(sys.argv) > 3 else (144, 256)
+    net = LaneSegNet()
+    print("params", sum(p.numel() for p in net.parameters()))
+    x = torch.randn(8, 3, h, w)
+    y = torch.randint(0, NUM_CLASSES, (8, h // 2, w // 2))
+    opt = torch.optim.AdamW(net.parameters(), 1e-3)
+    for i in range(4):
+        t = time.time()
+        loss = F.cross_entropy(net(x), y)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        print("train batch 8: %.2f s" % (time.time() - t))

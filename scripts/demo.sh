@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# make demo: simulate a drive over the bundled West Oakland street network, map it with the
-# offline runner (road tracker -> BEV on the LIDAR mesh -> lane exploration -> intersections) on
-# the simulator's truth labels, and score the map against the ground truth.
+# make demo: simulate a drive over the bundled West Oakland street network, segment its camera
+# frames with the shipped model, map it with the offline runner (road tracker -> BEV on the LIDAR
+# mesh -> lane exploration -> intersections), score the map against the ground truth; then the
+# same on the simulator's truth labels, offline and through the live process graph.
 # Usage: scripts/demo.sh BUILD_DIR OUT_DIR
 set -euo pipefail
 build=${1:-build}
@@ -20,22 +21,30 @@ echo "== simulating a 60 s drive (seed 1)"
 echo "== what the log holds"
 "$bin/lanemap-lcm-stats" --log "$out/drive/drive.lcmlog"
 
-echo "== mapping the drive (lanemap-offline, oracle labels SEMANTIC_FRONT_TRUTH)"
-"$bin/lanemap-offline" --log "$out/drive/drive.lcmlog" --osm "$out/drive/roads.osm" --out "$out/map"
+echo "== segmenting the camera frames with the shipped model (lanemap-segmenter, offline mode)"
+"$bin/lanemap-segmenter" --config config/segmenter.yaml --lcm-url memq:// \
+  --log-in "$out/drive/drive.lcmlog" --log-out "$out/drive/segmented.lcmlog" | tail -n 1
 
-echo "== scores on the roads the drive mapped (lanemap-eval --mapped-roads-only)"
+echo "== mapping the drive on the model's labels (lanemap-offline, SEMANTIC_FRONT)"
+"$bin/lanemap-offline" --log "$out/drive/segmented.lcmlog" --osm "$out/drive/roads.osm" --out "$out/map" \
+  --semantic-channel SEMANTIC_FRONT
+echo "== scores on the roads the drive mapped (lanemap-eval --mapped-roads-only), model labels"
 "$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/map/map.osm" --mapped-roads-only --json "$out/map/eval.json"
 
-echo "== the live graph: lcm-logplayer at 1x -> road_tracker -> bev_builder -> lane_mapper over LCM"
+echo "== the same with the simulator's truth labels (oracle), for comparison"
+"$bin/lanemap-offline" -q --log "$out/drive/drive.lcmlog" --osm "$out/drive/roads.osm" --out "$out/map-oracle"
+"$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/map-oracle/map.osm" --mapped-roads-only --json "$out/map-oracle/eval.json"
+
+echo "== the live graph (oracle labels): lcm-logplayer at 1x -> road_tracker -> bev_builder -> lane_mapper over LCM"
 echo "   (lanemap-launch config/launch/demo.yaml, inside a private network namespace; about 70 s)"
 abs_out=$(cd "$out" && pwd)
 unshare -rn sh -c 'ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
   "$bin/lanemap-launch" config/launch/demo.yaml --all-hosts --set drive="$abs_out/drive" \
   --set store="$abs_out/live" --log-dir "$abs_out/live/logs" --status-interval 0 | tail -n 7
 cp "$out/live/lane_map.osm" "$out/live/map.osm"
-echo "== live map vs the truth, and vs the offline map"
+echo "== live map vs the truth, and vs the offline oracle map"
 "$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/live/map.osm" --mapped-roads-only --json "$out/live/eval.json"
-"$bin/lanemap-eval" --truth "$out/map/map.osm" --map "$out/live/map.osm" --json "$out/live/vs_offline.json" | grep -E "^lanes|precision"
+"$bin/lanemap-eval" --truth "$out/map-oracle/map.osm" --map "$out/live/map.osm" --json "$out/live/vs_offline.json" | grep -E "^lanes|precision"
 
 cat <<EOT
 
@@ -46,8 +55,9 @@ Demo output in $out/:
   drive/groundtruth.png             a picture of it over the street network
   drive/roads.osm                   the road-level OSM the mapper is given
   drive/scenario.json               route, seed, options, counts
-  map/map.osm, map.geojson, map.png the lane map built from the drive (Lanelet2, GeoJSON, picture)
+  map/map.osm, map.geojson, map.png the lane map built from the drive on the model's labels
   map/eval.json                     its scores against drive/groundtruth.osm
-  live/map.osm, live/eval.json      the same drive mapped by the live process graph over LCM
+  map-oracle/                       the same on the simulator's truth labels
+  live/map.osm, live/eval.json      the drive mapped by the live process graph over LCM (oracle)
 Map data (c) OpenStreetMap contributors, ODbL.
 EOT

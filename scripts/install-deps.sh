@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages lanemap needs, only when something is missing (idempotent).
-# Usage: scripts/install-deps.sh            (as root, or with sudo available)
+# Usage: scripts/install-deps.sh [PACKAGE ...]   (as root, or with sudo available)
+# Without arguments: lanemap's build and test packages; with arguments: those packages instead
+# (scripts/install-train-deps.sh uses this for the training tools).
 set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config git
@@ -10,6 +12,7 @@ PACKAGES=(
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev
   osmium-tool iproute2 util-linux
 )
+if [ $# -gt 0 ]; then PACKAGES=("$@"); fi
 missing=()
 for p in "${PACKAGES[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then

@@ -1,5 +1,7 @@
 // Lanelet2 OSM writer and reader for map::LaneMap (see lanelet2.h for the conventions).
+
 #include "core/io/lanelet2.h"
+#include "core/io/xml_escape.h"
 
 #include <osmium/handler.hpp>
 #include <osmium/io/reader.hpp>
@@ -90,22 +92,6 @@ double laneletRingArea(const std::vector<Eigen::Vector3d>& left,
     area2 += a.x() * b.y() - b.x() * a.y();
   }
   return 0.5 * area2;
-}
-
-std::string escapeXml(const std::string& s) {
-  std::string out;
-  out.reserve(s.size());
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default: out += c;
-    }
-  }
-  return out;
 }
 
 std::string formatDouble(const char* fmt, double v) {

@@ -1,5 +1,7 @@
 // Road-level OSM XML writer (see road_osm_writer.h).
+
 #include "core/io/road_osm_writer.h"
+#include "core/io/xml_escape.h"
 
 #include "core/io/atomic_file.h"
 
@@ -13,22 +15,6 @@ namespace {
 
 bool startsWith(const std::string& s, const std::string& prefix) {
   return s.compare(0, prefix.size(), prefix) == 0;
-}
-
-std::string escapeXml(const std::string& s) {
-  std::string out;
-  out.reserve(s.size());
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default: out += c;
-    }
-  }
-  return out;
 }
 
 // OSM's own precision: 7 decimals (about 1 cm).

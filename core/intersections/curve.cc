@@ -82,15 +82,13 @@ ConnectionCurve connectionCurve(const Vector2d& p0, const Vector2d& t0_in, const
   return c;
 }
 
-std::vector<Vector2d> offsetPolyline(const std::vector<Vector2d>& pts, const std::vector<double>& d) {
-  std::vector<Vector2d> out(pts.size());
-  for (size_t i = 0; i < pts.size(); ++i) {
-    const size_t a = i == 0 ? 0 : i - 1;
-    const size_t b = std::min(i + 1, pts.size() - 1);
-    const Vector2d t = unit(pts[b] - pts[a], Vector2d::UnitX());
-    out[i] = pts[i] + d[i] * Vector2d(-t.y(), t.x());
-  }
-  return out;
+ConnectorBounds connectorBounds(const Vector2d& left0, const Vector2d& right0, const Vector2d& t0,
+                                const Vector2d& left2, const Vector2d& right2, const Vector2d& t2,
+                                const CurveOptions& o) {
+  ConnectorBounds b;
+  b.left = connectionCurve(left0, t0, left2, t2, o).sample(o.step_m);
+  b.right = connectionCurve(right0, t0, right2, t2, o).sample(o.step_m);
+  return b;
 }
 
 double headingChange(const Vector2d& t_in, const Vector2d& t_out) {
@@ -110,6 +108,20 @@ bool selfIntersects(const std::vector<Vector2d>& pts) {
     }
   }
   return false;
+}
+
+bool outlineIsSimple(const std::vector<Vector2d>& left, const std::vector<Vector2d>& right) {
+  std::vector<Vector2d> ring = left;
+  ring.insert(ring.end(), right.rbegin(), right.rend());
+  ring.push_back(left.front());
+  const size_t n = ring.size() - 1;  // segments
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t j = i + 2; j < n; ++j) {
+      if (i == 0 && j == n - 1) continue;  // the closing segment meets the first one
+      if (segmentsCross(ring[i], ring[i + 1], ring[j], ring[j + 1])) return false;
+    }
+  }
+  return true;
 }
 
 }  // namespace lanemap::intersections

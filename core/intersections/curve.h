@@ -1,11 +1,7 @@
 // Plane geometry of intersection lanelets (METHOD.md section 5): the quadratic Bezier reference
-// trajectory through the tangent-intersection control point, its cubic fallback, offsets for the
-// lanelet's boundaries, and the turn direction from the heading change.
-//
-// Note: core/sim/world_geometry.h (sim::geom::connectionCurve) builds the simulator's ground-truth
-// connections with the same rule. It is duplicated here on purpose, small and with the curve's
-// control points exposed: core/intersections must not depend on the simulator, and moving the
-// shared code out of core/sim is the simulator owner's call (see the report of issue 6).
+// trajectory through the tangent-intersection control point, its cubic fallback, the lanelet's
+// bounds, and the turn direction from the heading change. The simulator builds its ground-truth
+// connections with these same functions (core/sim/world_builder.cc).
 #pragma once
 
 #include "core/map/lane_map.h"
@@ -42,9 +38,18 @@ ConnectionCurve connectionCurve(const Eigen::Vector2d& p0, const Eigen::Vector2d
                                 const Eigen::Vector2d& p2, const Eigen::Vector2d& t2,
                                 const CurveOptions& options = {});
 
-// Offsets `pts` by d[i] along its left normals (from neighbouring points). Sizes must agree.
-std::vector<Eigen::Vector2d> offsetPolyline(const std::vector<Eigen::Vector2d>& pts,
-                                            const std::vector<double>& d);
+// The two bounds of an intersection lanelet, each its own connection curve: from the in-lane's
+// bound end points (left0, right0), leaving with heading t0, to the out-lane's bound start points
+// (left2, right2), arriving with heading t2. They meet the road lanelets' bounds exactly and never
+// loop back, which offsets of a tight centre curve do wherever the offset exceeds the curve's
+// radius (the inner bound of a sharp turn on a small junction).
+struct ConnectorBounds {
+  std::vector<Eigen::Vector2d> left, right;
+};
+ConnectorBounds connectorBounds(const Eigen::Vector2d& left0, const Eigen::Vector2d& right0,
+                                const Eigen::Vector2d& t0, const Eigen::Vector2d& left2,
+                                const Eigen::Vector2d& right2, const Eigen::Vector2d& t2,
+                                const CurveOptions& options = {});
 
 // Signed heading change from t_in to t_out in (-pi, pi], counter-clockwise positive (left).
 double headingChange(const Eigen::Vector2d& t_in, const Eigen::Vector2d& t_out);
@@ -54,5 +59,9 @@ map::TurnDirection turnDirection(const Eigen::Vector2d& t_in, const Eigen::Vecto
 
 // True when two segments of the polyline that are not neighbours cross or touch.
 bool selfIntersects(const std::vector<Eigen::Vector2d>& pts);
+
+// True when the outline of a lanelet (left bound, then the right bound backwards, closed) is a
+// simple polygon: no bound crosses itself or the other one.
+bool outlineIsSimple(const std::vector<Eigen::Vector2d>& left, const std::vector<Eigen::Vector2d>& right);
 
 }  // namespace lanemap::intersections

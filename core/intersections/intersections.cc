@@ -1,6 +1,8 @@
 // Intersection topology and lanelets (see intersections.h).
 #include "core/intersections/intersections.h"
 
+#include "core/io/lanelet2.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -309,7 +311,8 @@ class Builder {
     const Approach* straightest = nullptr;
     double best_dot = -2.0;
     for (const Approach& d : outs_) {
-      const bool uturn = isUturn(*a.road, *d.road);
+      const bool uturn = isUturn(*a.road, *d.road) ||
+                         std::abs(headingChange(a.tangent, d.tangent)) > o_.uturn_min_deg * M_PI / 180.0;
       if (uturn && !o_.allow_u_turns) continue;
       const TurnDirection movement =
           uturn ? (o_.right_hand_traffic ? TurnDirection::kLeft : TurnDirection::kRight)
@@ -320,8 +323,7 @@ class Builder {
         straightest = &d;
       }
       for (const auto& [i, o] : pairLanes(a, d, movement, uturn)) {
-        connect(a, i, d, o, movement, false);
-        ++connections[i];
+        if (connect(a, i, d, o, movement, false)) ++connections[i];
       }
     }
     if (!o_.connect_orphan_lanes || !straightest) return;
@@ -334,44 +336,42 @@ class Builder {
     }
   }
 
-  void connect(const Approach& a, int i, const Approach& d, int o, TurnDirection movement, bool orphan) {
+  // Adds the intersection lanelet from lane i of `a` to lane o of `d`; false (and listed in
+  // not_built) when Lanelet2's loader would misread it (io::orientationProblem: a sharp connection
+  // between overlapping lane ends), so that the map stays loadable.
+  bool connect(const Approach& a, int i, const Approach& d, int o, TurnDirection movement, bool orphan) {
     const LaneEnd& from = a.lanes[i];
     const LaneEnd& to = d.lanes[o];
     const ConnectionCurve curve =
         connectionCurve(from.centre.head<2>(), from.tangent, to.centre.head<2>(), to.tangent, o_.curve);
     const std::vector<Vector2d> pts = curve.sample(o_.curve.step_m);
-    const size_t n = pts.size();
-    std::vector<double> u(n, 0.0);
-    for (size_t k = 1; k < n; ++k) u[k] = u[k - 1] + (pts[k] - pts[k - 1]).norm();
-    const double total = std::max(1e-9, u.back());
-    for (double& x : u) x /= total;
-    const auto offsets = [](const LaneEnd& e) {
-      const Vector2d nrm(-e.tangent.y(), e.tangent.x());
-      return std::pair<double, double>(nrm.dot((e.left - e.centre).head<2>()), nrm.dot((e.right - e.centre).head<2>()));
+    const ConnectorBounds bounds = connectorBounds(from.left.head<2>(), from.right.head<2>(), from.tangent,
+                                                   to.left.head<2>(), to.right.head<2>(), to.tangent, o_.curve);
+    // Heights run linearly in arc length from the in-lane's end to the out-lane's start.
+    const auto lift = [](const std::vector<Vector2d>& p, double z0, double z1) {
+      std::vector<double> u(p.size(), 0.0);
+      for (size_t k = 1; k < p.size(); ++k) u[k] = u[k - 1] + (p[k] - p[k - 1]).norm();
+      const double total = std::max(1e-9, u.back());
+      std::vector<Vector3d> out;
+      for (size_t k = 0; k < p.size(); ++k) out.emplace_back(p[k].x(), p[k].y(), z0 + (z1 - z0) * u[k] / total);
+      return out;
     };
-    const auto [dl0, dr0] = offsets(from);
-    const auto [dl1, dr1] = offsets(to);
     map::LineString left, right;
     left.type = right.type = map::LineType::kVirtual;
+    left.points = lift(bounds.left, from.left.z(), to.left.z());
+    right.points = lift(bounds.right, from.right.z(), to.right.z());
     map::Lanelet ll;
-    const Vector2d chord = unit(to.centre.head<2>() - from.centre.head<2>(), from.tangent);
-    for (size_t k = 0; k < n; ++k) {
-      const double param = static_cast<double>(k) / static_cast<double>(n - 1);
-      const Vector2d t = unit(curve.derivative(param), chord);
-      const Vector2d nrm(-t.y(), t.x());
-      const double z = (1.0 - u[k]) * from.centre.z() + u[k] * to.centre.z();
-      const double dl = (1.0 - u[k]) * dl0 + u[k] * dl1, dr = (1.0 - u[k]) * dr0 + u[k] * dr1;
-      const Vector2d pl = pts[k] + dl * nrm, pr = pts[k] + dr * nrm;
-      ll.centre.emplace_back(pts[k].x(), pts[k].y(), z);
-      left.points.emplace_back(pl.x(), pl.y(), z);
-      right.points.emplace_back(pr.x(), pr.y(), z);
-    }
+    ll.centre = lift(pts, from.centre.z(), to.centre.z());
     ll.centre.front() = from.centre;
     ll.centre.back() = to.centre;
     left.points.front() = from.left;
     left.points.back() = to.left;
     right.points.front() = from.right;
     right.points.back() = to.right;
+    if (!io::orientationProblem(ll, left, right).empty()) {
+      result_.not_built.push_back({a.road->id, i, d.road->id, o});
+      return false;
+    }
     left.id = next_id_++;
     right.id = next_id_++;
     ll.id = next_id_++;
@@ -397,6 +397,7 @@ class Builder {
     result_.map.lines.push_back(std::move(left));
     result_.map.lines.push_back(std::move(right));
     result_.map.lanelets.push_back(std::move(ll));
+    return true;
   }
 
   const skeleton::Skeleton& sk_;
@@ -465,6 +466,7 @@ IntersectionOptions IntersectionOptions::fromYaml(const YAML::Node& node) {
       else if (k == "pockets_are_turn_lanes") o.pockets_are_turn_lanes = v.as<bool>();
       else if (k == "connect_orphan_lanes") o.connect_orphan_lanes = v.as<bool>();
       else if (k == "straight_max_deg") o.straight_max_deg = v.as<double>();
+      else if (k == "uturn_min_deg") o.uturn_min_deg = v.as<double>();
       else if (k == "end_tolerance_m") o.end_tolerance_m = v.as<double>();
       else if (k == "lane_tangent_m") o.lane_tangent_m = v.as<double>();
       else if (k == "road_tangent_m") o.road_tangent_m = v.as<double>();

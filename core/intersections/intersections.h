@@ -5,7 +5,8 @@
 //
 // Topology. For every incoming road E_in and outgoing road E_out of the intersection:
 // - the movement is the heading change between the roads (straight below straight_max_deg, else
-//   left/right); U-turns (E_out is E_in's reverse) are skipped unless allowed; OSM turn
+//   left/right); U-turns (E_out is E_in's reverse, or a heading change beyond uturn_min_deg: onto
+//   the other carriageway of a dual carriageway) are skipped unless allowed; OSM turn
 //   restrictions (no_* / only_*, via the intersection's node) remove movements;
 // - straight: the lanes that may go straight pair k -> k counted from the inner side (the left in
 //   right-hand traffic: METHOD.md's "left lanes to left lanes", k = 1..min(N_in, N_out));
@@ -18,9 +19,9 @@
 // - a lane left with no connection continues into the straightest allowed way out (a lane drop
 //   merges rather than ending in the middle of the intersection).
 // Geometry: quadratic Bezier P0 -> P2 with P the tangents' intersection, cubic fallback (curve.h);
-// bounds: the centre curve offset by the lane's left/right offsets, interpolated from the incoming
-// lane's end to the outgoing lane's start, end points exactly the road lanelets' bound end points
-// (successors share end points, as Lanelet2 requires); typed virtual.
+// bounds: each its own connection curve from the incoming lane's bound end to the outgoing lane's
+// bound start (connectorBounds in curve.h), so end points are exactly the road lanelets' bound end
+// points (successors share end points, as Lanelet2 requires); typed virtual.
 #pragma once
 
 #include "core/intersections/curve.h"
@@ -51,6 +52,7 @@ struct IntersectionOptions {
   bool pockets_are_turn_lanes = true;
   bool connect_orphan_lanes = true;
   double straight_max_deg = 40.0;  // |heading change| below this is straight
+  double uturn_min_deg = 150.0;    // |heading change| above this is a U-turn
   // A lanelet with no successor on its road ends at the intersection when its end projects within
   // this of the road's s_end (for outgoing roads: starts within this of s_begin).
   double end_tolerance_m = 12.0;
@@ -92,6 +94,15 @@ struct IntersectionResult {
   int64_t intersection_id = -1;
   map::LaneMap map;  // the intersection lanelets and their bounds (origin of the road maps)
   std::vector<Connection> connections;
+  // Pairs the topology asked for whose lanelet Lanelet2 would misread (sharp connections between
+  // overlapping lane ends): not in `map` nor in `connections`.
+  struct NotBuilt {
+    int64_t in_road = -1;
+    int in_index = -1;
+    int64_t out_road = -1;
+    int out_index = -1;
+  };
+  std::vector<NotBuilt> not_built;
 };
 
 // One intersection. `roads`: road id -> that road's lanes (map::LaneMap as core/lanes'

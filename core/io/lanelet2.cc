@@ -12,6 +12,7 @@
 #include <osmium/visitor.hpp>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -78,20 +79,54 @@ bool runsAgainst(const std::vector<Eigen::Vector3d>& left, const std::vector<Eig
   return crossed < same;
 }
 
-// Signed area (shoelace, xy) of the ring left bound + reversed right bound. Negative when the
-// left bound lies on the left of the driving direction (the ring then runs clockwise).
-double laneletRingArea(const std::vector<Eigen::Vector3d>& left,
-                       const std::vector<Eigen::Vector3d>& right) {
-  std::vector<Eigen::Vector2d> ring;
-  for (const auto& p : left) ring.push_back(p.head<2>());
-  for (auto it = right.rbegin(); it != right.rend(); ++it) ring.push_back(it->head<2>());
-  double area2 = 0.0;
-  for (size_t i = 0; i < ring.size(); ++i) {
-    const auto& a = ring[i];
-    const auto& b = ring[(i + 1) % ring.size()];
-    area2 += a.x() * b.y() - b.x() * a.y();
+// Lanelet2's geometry::signedDistance(lineString, p) in xy: the distance to the nearest segment
+// (the first of equals), positive when p lies on its left; where p projects onto the segment's end
+// vertex, the side is decided with the next segment as Lanelet2's internal::isLeftOf does.
+double signedDistance2d(const std::vector<Eigen::Vector3d>& ls, const Eigen::Vector2d& p) {
+  const auto leftOf = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& q) {
+    const Eigen::Vector2d u = b - a, v = q - a;
+    return u.x() * v.y() - u.y() * v.x() > 0.0;
+  };
+  double best = std::numeric_limits<double>::infinity();
+  size_t seg = 0;
+  bool at_end = false;
+  for (size_t i = 0; i + 1 < ls.size(); ++i) {
+    const Eigen::Vector2d a = ls[i].head<2>(), b = ls[i + 1].head<2>();
+    const double len2 = (b - a).squaredNorm();
+    const double t = len2 > 0.0 ? std::clamp((p - a).dot(b - a) / len2, 0.0, 1.0) : 0.0;
+    const double d = (a + t * (b - a) - p).norm();
+    if (d < best) {
+      best = d;
+      seg = i;
+      at_end = t >= 1.0;
+    }
   }
-  return 0.5 * area2;
+  const Eigen::Vector2d s1 = ls[seg].head<2>(), s2 = ls[seg + 1].head<2>();
+  bool left = leftOf(s1, s2, p);
+  if (at_end && seg + 2 < ls.size()) {
+    const Eigen::Vector2d next = ls[seg + 2].head<2>();
+    if (left != leftOf(s2, next, p) && left == leftOf(s1, s2, next)) left = !left;
+  }
+  return left ? best : -best;
+}
+
+// Lanelet2's geometry::align(left, right), which its OSM loader applies to every lanelet's bounds
+// as they are stored: the left bound is inverted unless the middle point of the right bound lies
+// on its right, then the right bound unless the middle point of the (aligned) left lies on its
+// left. The lanelet's driving direction is the direction of the aligned bounds.
+struct Alignment {
+  bool invert_left = false, invert_right = false;
+};
+Alignment lanelet2Alignment(const std::vector<Eigen::Vector3d>& left, const std::vector<Eigen::Vector3d>& right) {
+  Alignment a;
+  if (left.empty() || right.empty() || (left.size() <= 1 && right.size() <= 1)) return a;
+  const auto middle = [](const std::vector<Eigen::Vector3d>& ls, bool inverted) -> Eigen::Vector2d {
+    if (ls.size() <= 2) return 0.5 * (ls.front() + ls.back()).head<2>();
+    return ls[inverted ? ls.size() - 1 - ls.size() / 2 : ls.size() / 2].head<2>();
+  };
+  a.invert_left = left.size() > 1 && !(signedDistance2d(left, middle(right, false)) < 0.0);
+  a.invert_right = right.size() > 1 && !(signedDistance2d(right, middle(left, a.invert_left)) > 0.0);
+  return a;
 }
 
 std::string formatDouble(const char* fmt, double v) {
@@ -194,29 +229,29 @@ IdPlan planIds(const LaneMap& map) {
   return plan;
 }
 
-// Lanelet2's loader aligns a lanelet's bounds by geometry alone (OSM cannot say "inverted"): it
-// turns the right bound to run like the left one, then turns both when the left one lies on the
-// right. A bound may therefore run against the driving direction, as the line shared by two lanes
-// of opposite directions does for one of them. The problem is a lanelet that Lanelet2 would read
-// against its own centre line (our driving direction), or whose bounds are degenerate.
+}  // namespace
+
+// Lanelet2's loader aligns a lanelet's bounds by geometry alone (OSM cannot say "inverted"), with
+// lanelet2::geometry::align (lanelet2Alignment above). A bound may therefore run against the
+// driving direction, as the line shared by two lanes of opposite directions does for one of them.
 std::string orientationProblem(const map::Lanelet& ll, const map::LineString& left,
                                const map::LineString& right) {
   if (left.points.size() < 2 || right.points.size() < 2) return {};
   std::vector<Eigen::Vector3d> l = left.points;
   std::vector<Eigen::Vector3d> r = right.points;
-  if (runsAgainst(l, r)) std::reverse(r.begin(), r.end());
-  const bool turned = laneletRingArea(l, r) > 0.0;
-  if (turned) {
-    std::reverse(l.begin(), l.end());
-    std::reverse(r.begin(), r.end());
-  }
-  if (ll.centre.size() >= 2 ? runsAgainst(l, ll.centre) : turned) {
-    return "lanelet " + std::to_string(ll.id) + ": Lanelet2 would read its bounds (left " +
-           std::to_string(left.id) + ", right " + std::to_string(right.id) +
-           ") against its driving direction: the left bound must lie on the left";
+  const Alignment a = lanelet2Alignment(l, r);
+  if (a.invert_left) std::reverse(l.begin(), l.end());
+  if (a.invert_right) std::reverse(r.begin(), r.end());
+  const std::string bounds = "lanelet " + std::to_string(ll.id) + ": Lanelet2 would read its bounds (left " +
+                             std::to_string(left.id) + ", right " + std::to_string(right.id) + ") ";
+  if (runsAgainst(l, r)) return bounds + "running against each other";
+  if (ll.centre.size() >= 2 && runsAgainst(l, ll.centre)) {
+    return bounds + "against its driving direction: the left bound must lie on the left";
   }
   return {};
 }
+
+namespace {
 
 void validateForWriting(const LaneMap& map, const Lanelet2WriteOptions& options,
                         const std::string& name) {
@@ -787,11 +822,9 @@ class Lanelet2Reader {
     if (rl.left.points.size() < 2 || rl.right.points.size() < 2) {
       malformed("lanelet " + std::to_string(rl.lanelet.id) + " has a bound with fewer than 2 nodes");
     }
-    if (runsAgainst(rl.left.points, rl.right.points)) rl.right.reverse();
-    if (laneletRingArea(rl.left.points, rl.right.points) > 0.0) {
-      rl.left.reverse();
-      rl.right.reverse();
-    }
+    const Alignment a = lanelet2Alignment(rl.left.points, rl.right.points);
+    if (a.invert_left) rl.left.reverse();
+    if (a.invert_right) rl.right.reverse();
   }
 
   // One LineString per way in its own direction; a reversed copy (fresh id) for lanelets that use

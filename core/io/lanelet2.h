@@ -50,8 +50,15 @@ void writeLanelet2(const map::LaneMap& map, const std::string& path,
 std::string toLanelet2Xml(const map::LaneMap& map, const Lanelet2WriteOptions& options = {},
                           const std::string& name = "<lanelet2>");
 
-// One message per lanelet whose bounds do not run in one direction or whose left bound is not on
-// its left (in the driving direction). Empty when the map is consistent.
+// How Lanelet2's loader would read a lanelet: it aligns the two bounds as stored with
+// lanelet2::geometry::align (the left bound is turned unless the middle point of the right bound
+// lies on its right, then the right bound unless the middle point of the left lies on its left),
+// and the lanelet's direction is theirs. A message when the aligned bounds run against each other
+// or against the lanelet's centre line (its driving direction); empty when Lanelet2 reads it as
+// meant. Long U-shaped lanelets and sharp connections between overlapping lane ends can fail.
+std::string orientationProblem(const map::Lanelet& lanelet, const map::LineString& left,
+                               const map::LineString& right);
+// orientationProblem for every lanelet of the map. Empty when the map is consistent.
 std::vector<std::string> orientationProblems(const map::LaneMap& map);
 
 // The lanelet's outline for drawing and export: left bound forwards, then the right bound

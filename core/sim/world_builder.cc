@@ -14,6 +14,9 @@
 // Intersections join the incoming to the outgoing lanes with Bezier lanelets (METHOD.md 5).
 #include "core/sim/world_builder.h"
 
+#include "core/intersections/curve.h"
+#include "core/io/lanelet2.h"
+#include "core/map/simplify.h"
 #include "core/sim/world_geometry.h"
 #include "core/sim/world_scene.h"
 
@@ -175,6 +178,9 @@ struct CrossSection {
   }
 };
 
+// One end of a cross-section: (its key, the end at s = 0).
+using TrimKey = std::pair<int64_t, bool>;
+
 // End of a lane at an intersection.
 struct LaneEnd {
   int64_t lanelet = -1;
@@ -211,6 +217,9 @@ class Builder {
     truth().origin_alt = origin.alt;
     makeTerrain();
     groupCrossSections();
+    // Smoothing over about the road's half width: the lanes of a hairpin tighter than the road's
+    // width still fold on its inner side (a known limit, see the Monaco test).
+    for (auto& xs : xss_) xs.line = RefLine(xs.ref->polyline, 1.0, std::clamp(xs.halfWidth(), 3.0, 8.0));
     computeNodeInfo();
     for (auto& xs : xss_) buildCrossSection(xs);
     for (const auto& in : sk_.intersections()) buildIntersection(in);
@@ -346,6 +355,11 @@ class Builder {
     xs.anchor = xs.two_way ? 0.0 : xs.side[0].lanesWidth() / 2.0;
   }
 
+  // How far from each junction the lanes of every incident cross-section end (its trim there): the
+  // widest carriageway half width at the junction + 1 m. (A rule that also cleared the corners of
+  // roads meeting at acute angles, (h_i + h_j) / sin theta, made the truth's lanes end up to 25 m
+  // before such junctions, where lanemap's mapper, which ends lanes at the OSM junction's ROI,
+  // cannot follow: West Oakland's oracle intersection RMS went from 0.07 to 0.47 m. Not used.)
   void computeNodeInfo() {
     for (const auto& in : sk_.intersections()) {
       std::set<int64_t> xset;
@@ -354,8 +368,16 @@ class Builder {
       degree_[in.id] = static_cast<int>(xset.size());
       double rmax = 0.0;
       for (int64_t x : xset) rmax = std::max(rmax, xss_[x].halfWidth());
-      min_trim_[in.id] = in.dead_end ? 0.0 : rmax + 1.0;
+      const double trim = in.dead_end ? 0.0 : rmax + 1.0;
+      for (int64_t x : xset) {
+        if (xss_[x].ref->from == in.id) trim_[{x, true}] = trim;
+        if (xss_[x].ref->to == in.id) trim_[{x, false}] = trim;
+      }
     }
+  }
+  double trimAt(int64_t xs, bool at_start) const {
+    const auto it = trim_.find({xs, at_start});
+    return it == trim_.end() ? 0.0 : it->second;
   }
   int degree(int64_t node) const {
     auto it = degree_.find(node);
@@ -433,8 +455,8 @@ class Builder {
     }
     sb *= L / raw;
     se *= L / raw;
-    sb = std::max(sb, min_trim_[xs.ref->from]);
-    se = std::min(se, L - min_trim_[xs.ref->to]);
+    sb = std::max(sb, trimAt(xs.key, true));
+    se = std::min(se, L - trimAt(xs.key, false));
     constexpr double kMin = 4.0;
     if (se - sb < kMin) {
       const double mid = std::clamp((sb + se) / 2.0, 0.0, L);
@@ -486,6 +508,84 @@ class Builder {
     }
   }
 
+  // The section's columns: template, samples and offsets (what buildSection lays its lines on).
+  void fillColumns(const CrossSection& xs, Section& sec) const {
+    sec.cols = columnTemplate(xs, sec);
+    sec.ss = xs.line.samplesBetween(sec.s0, sec.s1);
+    sec.d.assign(sec.cols.size(), std::vector<double>(sec.ss.size()));
+    for (size_t i = 0; i < sec.ss.size(); ++i) {
+      const auto v = columnValues(xs, sec, sec.ss[i]);
+      for (size_t c = 0; c < v.size(); ++c) sec.d[c][i] = v[c];
+    }
+  }
+
+  // A boundary line of a section as buildSection makes it (before its id, type and direction).
+  std::vector<Vector3d> boundaryPoints(const CrossSection& xs, const Section& sec, int col) const {
+    // The inner edge of a bend tighter than the offset folds: it is a corner on the ground.
+    auto pts = columnPoints3(xs, sec, col);
+    std::vector<Vector2d> dirs(sec.ss.size());
+    for (size_t i = 0; i < dirs.size(); ++i) dirs[i] = xs.line.tangentAt(sec.ss[i]);
+    geom::dropBackwardPoints(pts, dirs);
+    geom::removeLoops(pts, 80);
+    return pts;
+  }
+
+  // The lanes of one side of a section as (inner column, outer column), inner -> outer.
+  std::vector<std::pair<int, int>> laneColumns(const Section& sec, int k) const {
+    const int nc = static_cast<int>(sec.cols.size());
+    int anchor = -1;
+    for (int c = 0; c < nc; ++c) {
+      if (sec.cols[c].kind == ColKind::kAnchor) anchor = c;
+    }
+    std::vector<std::pair<int, int>> out;
+    int inner = anchor;
+    for (int c = k == 0 ? anchor + 1 : anchor - 1; k == 0 ? c < nc : c >= 0; c += k == 0 ? 1 : -1) {
+      if (sec.cols[c].kind == ColKind::kPocketDiv || sec.cols[c].kind == ColKind::kLaneOuter) out.emplace_back(inner, c);
+      inner = c;
+    }
+    return out;
+  }
+
+  // True when Lanelet2 would read every lanelet of the section as meant.
+  bool sectionIsSound(const CrossSection& xs, Section sec) const {
+    fillColumns(xs, sec);
+    for (int k = 0; k < 2; ++k) {
+      if (xs.side[k].dir == 0) continue;
+      for (const auto& [inner, outer] : laneColumns(sec, k)) {
+        LineString in, out;
+        in.points = boundaryPoints(xs, sec, inner);
+        out.points = boundaryPoints(xs, sec, outer);
+        Lanelet l;
+        for (size_t i = 0; i < sec.ss.size(); ++i) {
+          const Vector2d p = at(xs, sec.ss[i], (sec.d[inner][i] + sec.d[outer][i]) / 2.0);
+          l.centre.emplace_back(p.x(), p.y(), 0.0);
+        }
+        if (xs.side[k].dir < 0) std::reverse(l.centre.begin(), l.centre.end());
+        const bool left_is_inner = o_.right_hand_traffic;
+        if (!lanelet2ReadsAsMeant(l, left_is_inner ? in : out, left_is_inner ? out : in)) return false;
+      }
+    }
+    return true;
+  }
+
+  // Where half of the reference line's heading change over [s0, s1] is done (a hairpin's tip).
+  double halfTurn(const CrossSection& xs, double s0, double s1) const {
+    constexpr double kStep = 1.0;
+    std::vector<std::pair<double, double>> turned;  // (s, heading change from s0 to s)
+    double total = 0.0;
+    Vector2d previous = xs.line.tangentAt(s0);
+    for (double s = s0 + kStep; s < s1; s += kStep) {
+      const Vector2d t = xs.line.tangentAt(s);
+      total += std::abs(intersections::headingChange(previous, t));
+      previous = t;
+      turned.emplace_back(s, total);
+    }
+    for (const auto& [s, sum] : turned) {
+      if (sum >= total / 2.0) return s;
+    }
+    return (s0 + s1) / 2.0;
+  }
+
   std::vector<Section> makeSections(const CrossSection& xs) const {
     std::vector<double> b = {xs.sb, xs.se};
     const Side& f = xs.side[0];
@@ -510,12 +610,10 @@ class Builder {
       if (it != b.end() && std::abs(*it - xs.se) < 1e-6) b.push_back((xs.se + g.pocket_start) / 2.0);
     }
     std::sort(b.begin(), b.end());
-    std::vector<Section> out;
-    for (size_t i = 0; i + 1 < b.size(); ++i) {
-      if (b[i + 1] - b[i] < 0.01) continue;
+    const auto section = [&](double s0, double s1) {
       Section sec;
-      sec.s0 = b[i];
-      sec.s1 = b[i + 1];
+      sec.s0 = s0;
+      sec.s1 = s1;
       const double mid = (sec.s0 + sec.s1) / 2.0;
       sec.pocket_in[0] = f.pocket && mid > f.pocket_start;
       sec.pocket_in[1] = g.pocket && mid < g.pocket_start;
@@ -523,7 +621,31 @@ class Builder {
         const Side& sd = xs.side[k];
         sec.bay_in[k] = sd.bay && mid > sd.bay_s0 && mid < sd.bay_s1;
       }
-      out.push_back(sec);
+      return sec;
+    };
+    std::vector<Section> out;
+    for (size_t i = 0; i + 1 < b.size(); ++i) {
+      if (b[i + 1] - b[i] >= 0.01) out.push_back(section(b[i], b[i + 1]));
+    }
+    // A long lanelet that turns back on itself (a hairpin) is read backwards by Lanelet2's loader
+    // (its geometry::align compares the bounds' middle points): a section with such a lanelet is
+    // split at the tip of its turn, up to three times over, while the pieces stay kMinPiece long.
+    constexpr double kMinPiece = 5.0;
+    for (int round = 0; round < 3; ++round) {
+      std::vector<Section> next;
+      bool split = false;
+      for (const Section& sec : out) {
+        const double s = halfTurn(xs, sec.s0, sec.s1);
+        if (s - sec.s0 < kMinPiece || sec.s1 - s < kMinPiece || sectionIsSound(xs, sec)) {
+          next.push_back(sec);
+          continue;
+        }
+        next.push_back(section(sec.s0, s));
+        next.push_back(section(s, sec.s1));
+        split = true;
+      }
+      out = std::move(next);
+      if (!split) break;
     }
     if (out.empty()) {  // cannot happen (se - sb >= 0.05), but never leave a road without lanes
       Section sec;
@@ -693,10 +815,6 @@ class Builder {
   }
 
   void buildCrossSection(CrossSection& xs) {
-    std::vector<Vector2d> raw = xs.ref->polyline;
-    // Smoothing over about the road's half width: the lanes of a hairpin tighter than the road's
-    // width still fold on its inner side (a known limit, see the Monaco test).
-    xs.line = RefLine(raw, 1.0, std::clamp(xs.halfWidth(), 3.0, 8.0));
     chooseTrim(xs);
     choosePocketsAndBays(xs);
     xs.sections = makeSections(xs);
@@ -714,13 +832,7 @@ class Builder {
   }
 
   void buildSection(CrossSection& xs, Section& sec) {
-    sec.cols = columnTemplate(xs, sec);
-    sec.ss = xs.line.samplesBetween(sec.s0, sec.s1);
-    sec.d.assign(sec.cols.size(), std::vector<double>(sec.ss.size()));
-    for (size_t i = 0; i < sec.ss.size(); ++i) {
-      const auto v = columnValues(xs, sec, sec.ss[i]);
-      for (size_t c = 0; c < v.size(); ++c) sec.d[c][i] = v[c];
-    }
+    fillColumns(xs, sec);
     const int nc = static_cast<int>(sec.cols.size());
     for (int c = 0; c < nc; ++c) {
       for (double v : sec.d[c]) {
@@ -736,7 +848,7 @@ class Builder {
       LineString ls;
       ls.id = nextId();
       ls.type = type;
-      ls.points = columnPoints3(xs, sec, c);
+      ls.points = boundaryPoints(xs, sec, c);
       // Lines inside the backward side run in its driving direction; the anchor and the forward
       // side run along the reference (the centre line is the one shared, inverted for one side).
       const bool reversed = sec.cols[c].side == 1 && xs.side[1].dir != 0;
@@ -1040,9 +1152,15 @@ class Builder {
 
   // ---------- intersections ----------
   static TurnDirection classify(const Vector2d& tin, const Vector2d& tout) {
-    const double ang = std::atan2(geom::cross(tin, tout), tin.dot(tout));
-    if (std::abs(ang) < 40.0 * kPi / 180.0) return TurnDirection::kStraight;
-    return ang > 0 ? TurnDirection::kLeft : TurnDirection::kRight;
+    return intersections::turnDirection(tin, tout, 40.0);
+  }
+  // A U-turn: back onto the same road, or a heading change beyond kUturnMinDeg (onto the other
+  // carriageway of a dual carriageway, through the median). Not built (no U-turns, METHOD.md 5).
+  static bool isUturn(const Approach& a, const Approach& d) {
+    constexpr double kUturnMinDeg = 150.0;
+    return d.xs == a.xs ||
+           std::abs(intersections::headingChange(a.lanes.front().tangent, d.lanes.front().tangent)) >
+               kUturnMinDeg * kPi / 180.0;
   }
 
   void buildIntersection(const skeleton::Intersection& in) {
@@ -1056,7 +1174,7 @@ class Builder {
       const Approach* straightest = nullptr;
       double best_dot = -2.0;
       for (const Approach& d : outs) {
-        if (d.xs == a.xs || a.lanes.empty() || d.lanes.empty()) continue;  // no U-turns
+        if (a.lanes.empty() || d.lanes.empty() || isUturn(a, d)) continue;
         const Vector2d tin = a.lanes.front().tangent, tout = d.lanes.front().tangent;
         if (tin.dot(tout) > best_dot) {
           best_dot = tin.dot(tout);
@@ -1064,8 +1182,7 @@ class Builder {
         }
         const TurnDirection turn = classify(tin, tout);
         for (const auto& [i, o] : pairLanes(a, d, turn)) {
-          connect(in, a.lanes[i], d.lanes[o], turn, &radius);
-          ++connections[i];
+          if (connect(in, a.lanes[i], d.lanes[o], turn, &radius)) ++connections[i];
         }
       }
       // No lane may end at an intersection that has a way out: link it straight on.
@@ -1127,43 +1244,66 @@ class Builder {
     return out;
   }
 
-  void connect(const skeleton::Intersection& in, const LaneEnd& a, const LaneEnd& b, TurnDirection turn, double* radius) {
-    const auto curve = geom::connectionCurve(a.centre, a.tangent, b.centre, b.tangent, 0.5);
-    const size_t n = curve.size();
-    std::vector<double> dl(n), dr(n);
-    for (size_t i = 0; i < n; ++i) {
-      const double u = static_cast<double>(i) / (n - 1);
-      const double w = (1 - u) * a.width + u * b.width;
-      dl[i] = w / 2.0;
-      dr[i] = -w / 2.0;
-    }
-    auto left = geom::offsetPolyline(curve, dl);
-    auto right = geom::offsetPolyline(curve, dr);
-    left.front() = a.left;
-    left.back() = b.left;
-    right.front() = a.right;
-    right.back() = b.right;
+  // Lanelet2's loader reads the lanelet as meant (io::orientationProblem), also once simplified as
+  // groundtruth.osm is written.
+  static bool lanelet2ReadsAsMeant(const Lanelet& l, const LineString& left, const LineString& right) {
+    if (!io::orientationProblem(l, left, right).empty()) return false;
+    Lanelet ls = l;
+    LineString lefts = left, rights = right;
+    ls.centre = map::simplifyPolyline(l.centre, kTruthSimplifyTolerance);
+    lefts.points = map::simplifyPolyline(left.points, kTruthSimplifyTolerance);
+    rights.points = map::simplifyPolyline(right.points, kTruthSimplifyTolerance);
+    return io::orientationProblem(ls, lefts, rights).empty();
+  }
+
+  // An intersection lanelet is sound when its outline is a simple polygon (its bounds do not cross)
+  // and Lanelet2 reads it as meant.
+  static bool connectionIsSound(const Lanelet& l, const LineString& left, const LineString& right) {
+    const auto xy = [](const std::vector<Vector3d>& p) {
+      std::vector<Vector2d> out;
+      for (const auto& q : p) out.push_back(q.head<2>());
+      return out;
+    };
+    return intersections::outlineIsSimple(xy(left.points), xy(right.points)) && lanelet2ReadsAsMeant(l, left, right);
+  }
+
+  // Builds the intersection lanelet a -> b. Not built (false, counted) when it is not sound (see
+  // connectionIsSound): a sharp connection between lane ends that overlap, at the junctions of
+  // roads too short for their trims (a few dozen of Monaco's ~6,000 connections).
+  bool connect(const skeleton::Intersection& in, const LaneEnd& a, const LaneEnd& b, TurnDirection turn, double* radius) {
+    intersections::CurveOptions curve_options;
+    curve_options.step_m = 0.5;
+    const auto curve = intersections::connectionCurve(a.centre, a.tangent, b.centre, b.tangent, curve_options)
+                           .sample(curve_options.step_m);
+    const auto bounds = intersections::connectorBounds(a.left, a.right, a.tangent, b.left, b.right, b.tangent,
+                                                       curve_options);
+    const auto& left = bounds.left;
+    const auto& right = bounds.right;
     auto lift = [&](const std::vector<Vector2d>& pts) {
       std::vector<Vector3d> out;
       for (const auto& p : pts) out.emplace_back(p.x(), p.y(), terrainAt(p));
       return out;
     };
     LineString lb, rb;
-    lb.id = nextId();
     lb.type = LineType::kVirtual;
     lb.points = lift(left);
-    rb.id = nextId();
     rb.type = LineType::kVirtual;
     rb.points = lift(right);
     // Keep the joints' heights equal to the road lanes' (crown faded to 0 there anyway).
     Lanelet l;
-    l.id = nextId();
     l.kind = LaneletKind::kIntersection;
-    l.left_id = lb.id;
-    l.right_id = rb.id;
     l.centre = lift(curve);
     l.centre.front() = laneletRef(a.lanelet).centre.back();
     l.centre.back() = laneletRef(b.lanelet).centre.front();
+    if (!connectionIsSound(l, lb, rb)) {
+      ++impl_->stats.connections_not_built;
+      return false;
+    }
+    lb.id = nextId();
+    rb.id = nextId();
+    l.id = nextId();
+    l.left_id = lb.id;
+    l.right_id = rb.id;
     l.successors = {b.lanelet};
     l.turn = turn;
     l.intersection_id = in.id;
@@ -1176,6 +1316,7 @@ class Builder {
     laneletRef(a.lanelet).successors.push_back(l.id);
     pushLanelet(std::move(l));
     ++impl_->stats.intersection_lanelets;
+    return true;
   }
 
   static std::vector<Vector2d> convexHull(std::vector<Vector2d> p) {
@@ -1468,7 +1609,7 @@ class Builder {
   std::vector<CrossSection> xss_;
   std::unordered_map<int64_t, int64_t> xs_of_road_;
   std::unordered_map<int64_t, int> degree_;
-  std::unordered_map<int64_t, double> min_trim_;
+  std::map<TrimKey, double> trim_;  // (cross-section, at its start) -> trim at that junction
   std::unordered_map<int64_t, std::pair<bool, int>> lanelet_meta_;  // pocket, position
   std::unordered_map<int64_t, size_t> lanelet_pos_, line_pos_;
   std::map<int64_t, std::vector<Approach>> incoming_, outgoing_;

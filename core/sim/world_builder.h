@@ -95,10 +95,15 @@ inline constexpr double kDashPeriod = 9.0;
 inline constexpr double kLinePaintWidth = 0.15;      // single lines
 inline constexpr double kDoubleLineOffset = 0.1;     // solid_solid: two lines at +-0.1 m (0.1 wide)
 
+// groundtruth.osm is written simplified to this tolerance (map::simplified, metres); the world
+// builder checks that its lanelets stay sound (Lanelet2-readable) once simplified.
+inline constexpr double kTruthSimplifyTolerance = 0.01;
+
 struct WorldStats {
   size_t cross_sections = 0;       // way segments between intersections (both directions)
   size_t road_lanelets = 0;
   size_t intersection_lanelets = 0;
+  size_t connections_not_built = 0;  // Lanelet2 would misread them (see world_builder.cc connect)
   size_t lines = 0;
   size_t parking_lanes = 0, bike_lanes = 0, bus_bays = 0, turn_pockets = 0;
   size_t crosswalks = 0, stop_lines = 0, faded = 0, missing = 0;

@@ -134,46 +134,6 @@ std::vector<double> RefLine::samplesBetween(double s0, double s1) const {
   return out;
 }
 
-std::vector<Vector2d> connectionCurve(const Vector2d& p0, const Vector2d& t0_in, const Vector2d& p2,
-                                      const Vector2d& t2_in, double step, bool* used_quadratic) {
-  const Vector2d t0 = safeNormalized(t0_in, Vector2d::UnitX());
-  const Vector2d t2 = safeNormalized(t2_in, t0);
-  const double dist = (p2 - p0).norm();
-  // Tangent lines p0 + a t0 and p2 - b t2 meet where a t0 + b t2 = p2 - p0.
-  const double det = cross(t0, t2);
-  bool quadratic = false;
-  Vector2d ctrl = Vector2d::Zero();
-  if (std::abs(det) > std::sin(10.0 * M_PI / 180.0) && dist > 1e-6) {
-    const Vector2d r = p2 - p0;
-    const double a = cross(r, t2) / det;
-    const double b = cross(t0, r) / det;
-    // Both in front of their ends and not absurdly far (a control point far away makes a loop).
-    if (a > 0.05 * dist && b > 0.05 * dist && a < 3.0 * dist && b < 3.0 * dist) {
-      ctrl = p0 + a * t0;
-      quadratic = true;
-    }
-  }
-  if (used_quadratic) *used_quadratic = quadratic;
-  // Rough length for the sampling density.
-  const double approx = quadratic ? ((ctrl - p0).norm() + (p2 - ctrl).norm() + dist) / 2.0 : dist * 1.2;
-  int n = std::max(5, static_cast<int>(std::ceil(approx / step)) + 1);
-  if (n % 2 == 0) ++n;  // odd: the middle sample is the curve's midpoint a = 1/2
-  std::vector<Vector2d> out(n);
-  const Vector2d c1 = p0 + t0 * dist / 3.0, c2 = p2 - t2 * dist / 3.0;
-  for (int i = 0; i < n; ++i) {
-    const double a = static_cast<double>(i) / (n - 1);
-    const double b = 1.0 - a;
-    if (quadratic) {
-      out[i] = b * b * p0 + 2.0 * a * b * ctrl + a * a * p2;
-    } else {
-      out[i] = b * b * b * p0 + 3.0 * b * b * a * c1 + 3.0 * b * a * a * c2 + a * a * a * p2;
-    }
-  }
-  out.front() = p0;
-  out.back() = p2;
-  return out;
-}
-
 std::vector<Vector2d> offsetPolyline(const std::vector<Vector2d>& pts, const std::vector<double>& d) {
   std::vector<Vector2d> out(pts.size());
   for (size_t i = 0; i < pts.size(); ++i) {
@@ -183,6 +143,42 @@ std::vector<Vector2d> offsetPolyline(const std::vector<Vector2d>& pts, const std
     out[i] = pts[i] + d[i] * Vector2d(-t.y(), t.x());
   }
   return out;
+}
+
+int removeLoops(std::vector<Vector3d>& pts, size_t window) {
+  int cut = 0;
+  for (size_t i = 0; i + 3 < pts.size(); ++i) {
+    const Vector2d a = pts[i].head<2>(), b = pts[i + 1].head<2>();
+    for (size_t j = std::min(pts.size() - 2, i + window); j >= i + 2; --j) {
+      // The last crossing in the window: everything between the two segments is the loop.
+      const Vector2d c = pts[j].head<2>(), d = pts[j + 1].head<2>();
+      const double den = cross(b - a, d - c);
+      if (std::abs(den) < 1e-12) continue;
+      const double t = cross(c - a, d - c) / den, u = cross(c - a, b - a) / den;
+      if (t <= 0.0 || t >= 1.0 || u <= 0.0 || u >= 1.0) continue;
+      const Vector2d x = a + t * (b - a);
+      const Vector3d crossing(x.x(), x.y(), pts[i].z() + t * (pts[i + 1].z() - pts[i].z()));
+      pts.erase(pts.begin() + static_cast<std::ptrdiff_t>(i + 1), pts.begin() + static_cast<std::ptrdiff_t>(j + 1));
+      pts.insert(pts.begin() + static_cast<std::ptrdiff_t>(i + 1), crossing);
+      ++cut;
+      break;
+    }
+  }
+  return cut;
+}
+
+int dropBackwardPoints(std::vector<Vector3d>& pts, const std::vector<Vector2d>& dirs) {
+  if (pts.size() < 3 || dirs.size() != pts.size()) return 0;
+  std::vector<Vector3d> kept{pts.front()};
+  for (size_t i = 1; i + 1 < pts.size(); ++i) {
+    if ((pts[i] - kept.back()).head<2>().dot(dirs[i]) > 0.0) kept.push_back(pts[i]);
+  }
+  // The last point stays (it joins the next lanelet): drop the kept points it does not advance from.
+  while (kept.size() > 1 && (pts.back() - kept.back()).head<2>().dot(dirs.back()) <= 0.0) kept.pop_back();
+  kept.push_back(pts.back());
+  const int dropped = static_cast<int>(pts.size() - kept.size());
+  pts = std::move(kept);
+  return dropped;
 }
 
 bool pointInPolygon(const Vector2d& p, const std::vector<Vector2d>& poly) {

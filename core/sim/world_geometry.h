@@ -10,6 +10,7 @@
 namespace lanemap::sim::geom {
 
 using Eigen::Vector2d;
+using Eigen::Vector3d;
 
 inline double cross(const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
 
@@ -45,15 +46,18 @@ double polylineLength(const std::vector<Vector2d>& pts);
 // Smooth 0 -> 1 over x in [0, 1] (clamped), zero slope at both ends.
 double smoothstep(double x);
 
-// Quadratic Bezier from p0 (heading t0) to p2 (arriving with heading t2) through the control point
-// where the two tangent lines meet; when they are (nearly) parallel or meet behind an end point, a
-// cubic with control points along the tangents. Returns the curve sampled every ~step metres
-// (end points exact). `used_quadratic` tells which.
-std::vector<Vector2d> connectionCurve(const Vector2d& p0, const Vector2d& t0, const Vector2d& p2,
-                                      const Vector2d& t2, double step, bool* used_quadratic = nullptr);
-
 // Offsets a polyline by d along its left normals (normals from neighbouring points).
 std::vector<Vector2d> offsetPolyline(const std::vector<Vector2d>& pts, const std::vector<double>& d);
+
+// Cuts the loops out of a polyline (xy; z interpolated at the cut): where segment i crosses a
+// later segment j within `window` samples, the points in between are replaced by the crossing
+// point. A bound offset from a curve tighter than the offset loops (a swallowtail); on the ground
+// the inner edge of such a hairpin is a corner. Returns how many loops were cut.
+int removeLoops(std::vector<Vector3d>& pts, size_t window);
+// Drops the points of a polyline that do not advance along the direction dirs[i] of the reference
+// line they were offset from (sizes equal): the reversed part of a fold, also one that begins
+// before the polyline does. The first and the last point stay. Returns how many were dropped.
+int dropBackwardPoints(std::vector<Vector3d>& pts, const std::vector<Vector2d>& dirs);
 
 bool pointInPolygon(const Vector2d& p, const std::vector<Vector2d>& poly);
 double pointSegmentDistance(const Vector2d& p, const Vector2d& a, const Vector2d& b);

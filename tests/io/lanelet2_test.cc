@@ -321,6 +321,46 @@ TEST(Lanelet2, WriterRejectsInconsistentMaps) {
   EXPECT_TRUE(orientationProblems(handMadeMap()).empty());
 }
 
+// orientationProblem follows Lanelet2's geometry::align (the middle point of each bound against
+// the nearest segment of the other). A U-turn of radius 6 m, 3.5 m wide: the right bound's middle
+// point is the outer apex, right of the inner bound's apex segment; the left bound's middle point is
+// the inner apex, left of the outer one: read as meant, whichever way its bounds are stored.
+// A 10 m lanelet whose right bound's middle point lies 2 m left of the left bound (the bounds
+// cross): align turns the left bound (that point is on its left), and then the right one too (the
+// left's middle point (-1.75, 5) is 1.35 m right of the right bound's first segment): read backwards.
+TEST(Lanelet2, OrientationFollowsLanelet2Align) {
+  const auto arc = [](double r, int n) {
+    std::vector<Eigen::Vector3d> pts;
+    for (int i = 0; i <= n; ++i) {
+      const double a = -M_PI / 2 + M_PI * i / n;  // from south, counter-clockwise, to north
+      pts.emplace_back(r * std::cos(a), r * std::sin(a), 0.0);
+    }
+    return pts;
+  };
+  map::Lanelet ll;
+  ll.id = 1;
+  ll.left_id = 2;
+  ll.right_id = 3;
+  ll.centre = arc(6.0, 40);  // a left U-turn: heading east at the south, west at the north
+  map::LineString left{2, LineType::kVirtual, arc(6.0 - 1.75, 40)};
+  map::LineString right{3, LineType::kVirtual, arc(6.0 + 1.75, 55)};
+  EXPECT_EQ(orientationProblem(ll, left, right), "");
+  std::reverse(left.points.begin(), left.points.end());
+  EXPECT_EQ(orientationProblem(ll, left, right), "");
+  std::swap(left, right);  // left bound outside: misread
+  EXPECT_NE(orientationProblem(ll, left, right), "");
+
+  map::Lanelet straight;
+  straight.id = 4;
+  straight.centre = {{0, 0, 0}, {0, 5, 0}, {0, 10, 0}};
+  map::LineString l{5, LineType::kVirtual, {{-1.75, 0, 0}, {-1.75, 5, 0}, {-1.75, 10, 0}}};
+  map::LineString r{6, LineType::kVirtual, {{1.75, 0, 0}, {-3.75, 5, 0}, {1.75, 10, 0}}};
+  EXPECT_NE(orientationProblem(straight, l, r).find("against its driving direction"), std::string::npos)
+      << orientationProblem(straight, l, r);
+  r.points[1].x() = 1.75;
+  EXPECT_EQ(orientationProblem(straight, l, r), "");
+}
+
 // A JOSM-style file: negative ids, no ele, the right bound drawn against the driving direction,
 // a successor found by node id, and one by position only (separate nodes 4 mm apart).
 TEST(Lanelet2, ReadsForeignMapWithNegativeIdsAndReversedBounds) {

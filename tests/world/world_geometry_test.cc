@@ -33,34 +33,6 @@ TEST(RefLine, KeepsEndsAndOffsetsAlongTheNormal) {
   for (size_t i = 1; i < ss.size(); ++i) EXPECT_GT(ss[i], ss[i - 1]);
 }
 
-TEST(ConnectionCurve, QuadraticThroughTheTangentIntersection) {
-  bool quadratic = false;
-  const auto c = connectionCurve({0, 0}, {1, 0}, {10, 10}, {0, 1}, 0.5, &quadratic);
-  EXPECT_TRUE(quadratic);
-  EXPECT_LT((c.front() - Vector2d(0, 0)).norm(), 1e-12);
-  EXPECT_LT((c.back() - Vector2d(10, 10)).norm(), 1e-12);
-  // Control point (10, 0): B(1/2) = P0/4 + P/2 + P2/4 = (7.5, 2.5).
-  ASSERT_EQ(c.size() % 2, 1u);
-  EXPECT_LT((c[c.size() / 2] - Vector2d(7.5, 2.5)).norm(), 1e-9);
-  // Leaves along the incoming tangent, arrives along the outgoing one: the first and last ~0.5 m
-  // chords turn by half the curve's turn over them (< 2 degrees here).
-  EXPECT_NEAR((c[1] - c[0]).normalized().y(), 0.0, 0.03);
-  EXPECT_NEAR((c.back() - c[c.size() - 2]).normalized().x(), 0.0, 0.03);
-}
-
-TEST(ConnectionCurve, CubicWhenTangentsAreParallel) {
-  bool quadratic = true;
-  const auto c = connectionCurve({0, 0}, {1, 0}, {20, 3}, {1, 0}, 0.5, &quadratic);
-  EXPECT_FALSE(quadratic);
-  EXPECT_LT((c.back() - Vector2d(20, 3)).norm(), 1e-12);
-  // The first and last chords (~0.5 m) turn by less than 1 degree from the tangents.
-  EXPECT_NEAR((c[1] - c[0]).normalized().y(), 0.0, 0.02);
-  EXPECT_NEAR((c.back() - c[c.size() - 2]).normalized().y(), 0.0, 0.02);
-  // Symmetric S: B(1/2) is the midpoint of the end points.
-  ASSERT_EQ(c.size() % 2, 1u);
-  EXPECT_LT((c[c.size() / 2] - Vector2d(10, 1.5)).norm(), 1e-9);
-}
-
 TEST(Rect, DistancesAndOverlap) {
   Rect r;
   r.c = Vector2d(0, 0);

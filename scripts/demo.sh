@@ -35,12 +35,14 @@ echo "== the same with the simulator's truth labels (oracle), for comparison"
 "$bin/lanemap-offline" -q --log "$out/drive/drive.lcmlog" --osm "$out/drive/roads.osm" --out "$out/map-oracle"
 "$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/map-oracle/map.osm" --mapped-roads-only --json "$out/map-oracle/eval.json"
 
-echo "== the live graph (oracle labels): lcm-logplayer at 1x -> road_tracker -> bev_builder -> lane_mapper over LCM"
-echo "   (lanemap-launch config/launch/demo.yaml, inside a private network namespace; about 70 s)"
+echo "== the live graph (oracle labels): lcm-logplayer at 1x -> segmenter --oracle -> road_tracker -> bev_builder"
+echo "   -> lane_mapper over LCM (lanemap-launch config/launch/demo.yaml, inside a private network namespace; about 70 s)"
 abs_out=$(cd "$out" && pwd)
 unshare -rn sh -c 'ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
   "$bin/lanemap-launch" config/launch/demo.yaml --all-hosts --set drive="$abs_out/drive" \
-  --set store="$abs_out/live" --log-dir "$abs_out/live/logs" --status-interval 0 | tail -n 7
+  --set store="$abs_out/live" --log-dir "$abs_out/live/logs" --status-interval 0 | tail -n 9
+echo "== did the live graph keep up? (lanemap-graph-report: STATUS counters, latency, CPU, from live/graph.lcmlog)"
+"$bin/lanemap-graph-report" --log "$out/live/graph.lcmlog" --drive-log "$out/drive/drive.lcmlog" | tee "$out/live/report.txt"
 cp "$out/live/lane_map.osm" "$out/live/map.osm"
 echo "== live map vs the truth, and vs the offline oracle map"
 "$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/live/map.osm" --mapped-roads-only --json "$out/live/eval.json"
@@ -59,5 +61,7 @@ Demo output in $out/:
   map/eval.json                     its scores against drive/groundtruth.osm
   map-oracle/                       the same on the simulator's truth labels
   live/map.osm, live/eval.json      the drive mapped by the live process graph over LCM (oracle)
+  live/report.txt, graph.lcmlog     its drop counters, latency and CPU (lanemap-graph-report), and
+                                    what it recorded: STATUS, ROAD_EVENT, BEV_ROAD, LANE_MAP, POSE
 Map data (c) OpenStreetMap contributors, ODbL.
 EOT

@@ -22,6 +22,7 @@
 #include "lanemap/lidar_packets_t.hpp"
 #include "lanemap/pose_t.hpp"
 #include "processes/framework/channels.h"
+#include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
 
 #include <CLI/CLI.hpp>
@@ -97,24 +98,9 @@ class OfflineMapper {
   }
 
   void onPose(const pose_t& m) {
-    const bool valid = m.status != pose_t::STATUS_INVALID && std::isfinite(m.latitude) && std::isfinite(m.longitude);
-    bev::TimedPose p;
-    p.utime = m.utime;
-    p.position = valid ? sk_.frame().toEnu(m.latitude, m.longitude, m.altitude)
-                       : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-    p.orientation = Eigen::Quaterniond(m.orientation[0], m.orientation[1], m.orientation[2], m.orientation[3]);
-    builder_.addPose(p);
-
-    tracking::PoseInput in;
-    in.utime = m.utime;
-    in.valid = valid;
-    if (valid) {
-      in.position = p.position.head<2>();
-      const Eigen::Vector3d x = p.orientation * Eigen::Vector3d::UnitX();
-      in.heading = std::atan2(x.y(), x.x());
-      in.velocity = Eigen::Vector2d(m.velocity_enu[0], m.velocity_enu[1]);
-    }
-    for (const auto& e : tracker_.update(in)) {
+    const EnuPose p = toEnuPose(m, sk_.frame());
+    builder_.addPose(toTimedPose(p));
+    for (const auto& e : tracker_.update(toPoseInput(p))) {
       switch (e.type) {
         case tracking::RoadEventType::kEnteredRoad: builder_.roadEntered(e.road_id, e.utime); break;
         case tracking::RoadEventType::kReachedIntersection: builder_.roadClosed(e.road_id, e.utime); break;

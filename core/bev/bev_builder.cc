@@ -185,6 +185,7 @@ void BevBuilder::project(int64_t utime, const cv::Mat& labels, const Eigen::Isom
   const double ms = msSince(t0);
   stats_.project_ms_sum += ms;
   stats_.project_ms_max = std::max(stats_.project_ms_max, ms);
+  if (on_projected_) on_projected_(utime);
 }
 
 void BevBuilder::addSweep(SweepData sweep) {
@@ -325,6 +326,16 @@ std::vector<RoadBev> BevBuilder::takeClosed() {
 BevBuilderStats BevBuilder::stats() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return stats_;
+}
+
+size_t BevBuilder::pendingFrames() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return pending_.size();
+}
+
+void BevBuilder::setProjectedCallback(std::function<void(int64_t frame_utime)> callback) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  on_projected_ = std::move(callback);
 }
 
 std::shared_ptr<const ground::SweepGround> BevBuilder::latestMesh() const {

@@ -37,6 +37,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -110,6 +111,12 @@ class BevBuilder {
 
   std::vector<RoadBev> takeClosed();
   BevBuilderStats stats() const;
+  // Frames waiting for a later pose (neither projected nor counted as skipped yet).
+  size_t pendingFrames() const;
+  // Called with a frame's utime when its projection into the grid has finished, in the thread that
+  // fed the builder (inside addPose/addFrame/finish) with the builder's lock held: the callback must
+  // not call the builder. lanemap-bev-builder measures its frame-to-BEV latency with it.
+  void setProjectedCallback(std::function<void(int64_t frame_utime)> callback);
   const Projector& projector() const { return projector_; }
   const RoadBevAccumulator& accumulator() const { return accumulator_; }
   std::shared_ptr<const ground::SweepGround> latestMesh() const;
@@ -136,6 +143,7 @@ class BevBuilder {
   std::optional<SweepData> pending_sweep_;
   std::map<int64_t, int64_t> closing_;  // road id -> close utime
   std::vector<RoadBev> closed_;
+  std::function<void(int64_t)> on_projected_;
 
   mutable std::mutex mutex_;  // guards stats_ mesh fields, mesh_, work_
   std::condition_variable cv_;

@@ -2,8 +2,15 @@
 // in; one BEV grid per closed atomic road out, written atomically to <store>/bev/road_<id>.bev and
 // announced on BEV_ROAD (METHOD.md section 3). A thin wrapper over core/bev/bev_builder.h; the mesh
 // of each LIDAR sweep is built in core's worker thread so LCM handling never waits for it, a frame
-// projection runs inline (tools/bench/bev_bench.cc: ~10-20 ms). Counters in STATUS; handler times
-// in its latency percentiles.
+// projection runs inline (tools/bench/bev_bench.cc: ~10-20 ms). Counters in STATUS.
+//
+// STATUS latency (p50/p99 of the last 500 frames) is this process's share of frame-to-BEV: from the
+// label message's receive time (lcm::ReceiveBuffer::recv_utime, wall clock, taken by LCM's receive
+// thread) to the end of the frame's projection into its road's grid. It includes the wait in LCM's
+// queue behind other messages, the PNG decode, the wait for a pose newer than the frame (poses come
+// at 100 Hz: up to ~10 ms) and the projection. Frames that are never projected (late, no pose,
+// queue full: their counters) have no latency. Camera-to-BEV is the segmenter's latency (camera
+// frame received -> labels published) plus this one; lanemap-graph-report prints both and their sum.
 //
 //   lanemap-bev-builder --config config/bev_builder.yaml [--osm FILE] [--store DIR] [--vehicle FILE]
 //                       [--semantic-channel SEMANTIC_FRONT_TRUTH] [--no-lidar]
@@ -18,11 +25,13 @@
 #include "lanemap/pose_t.hpp"
 #include "lanemap/road_event_t.hpp"
 #include "processes/framework/channels.h"
+#include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
 
 #include <chrono>
 #include <iostream>
-#include <limits>
+#include <iterator>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -39,7 +48,9 @@ class BevBuilderApp {
  public:
   BevBuilderApp(Process& process, std::unique_ptr<skeleton::Skeleton> skeleton, const camera::CameraModel& camera,
                 const bev::BevBuilderOptions& options, std::string store)
-      : process_(process), skeleton_(std::move(skeleton)), builder_(*skeleton_, camera, options), store_(std::move(store)) {}
+      : process_(process), skeleton_(std::move(skeleton)), builder_(*skeleton_, camera, options), store_(std::move(store)) {
+    builder_.setProjectedCallback([this](int64_t utime) { onProjected(utime); });
+  }
 
   void subscribe(const std::string& semantic_channel, const YAML::Node& queues) {
     int q_pose = 1000, q_sem = 30, q_lidar = 10, q_event = 100;
@@ -63,21 +74,26 @@ class BevBuilderApp {
 
  private:
   void onPose(const lcm::ReceiveBuffer*, const std::string&, const pose_t* m) {
-    bev::TimedPose p;
-    p.utime = m->utime;
-    const bool valid = m->status != pose_t::STATUS_INVALID;
-    p.position = valid ? skeleton_->frame().toEnu(m->latitude, m->longitude, m->altitude)
-                       : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-    p.orientation = Eigen::Quaterniond(m->orientation[0], m->orientation[1], m->orientation[2], m->orientation[3]);
-    builder_.addPose(p);
+    builder_.addPose(toTimedPose(toEnuPose(*m, skeleton_->frame())));
     afterMessage();
   }
 
-  void onLabels(const lcm::ReceiveBuffer*, const std::string&, const label_image_t* m) {
-    const auto t0 = std::chrono::steady_clock::now();
+  void onLabels(const lcm::ReceiveBuffer* rbuf, const std::string&, const label_image_t* m) {
+    // Projection may happen now or on a later pose: onProjected() finds the receive time here.
+    // Frames are projected in utime order, so older entries left here were skipped frames.
+    received_.emplace(m->utime, rbuf->recv_utime);
+    while (received_.size() > 200) received_.erase(received_.begin());
     builder_.addEncodedFrame(m->utime, static_cast<bev::LabelEncoding>(m->encoding), m->data, m->width, m->height);
-    process_.latency().add(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     afterMessage();
+  }
+
+  // Called by the builder (LCM thread, inside addPose/addEncodedFrame/finish) when a frame's
+  // projection has finished.
+  void onProjected(int64_t frame_utime) {
+    const auto it = received_.find(frame_utime);
+    if (it == received_.end()) return;
+    process_.latency().add(static_cast<double>(nowUtime() - it->second) * 1e-3);
+    received_.erase(received_.begin(), std::next(it));
   }
 
   void onLidar(const lcm::ReceiveBuffer*, const std::string&, const lidar_packets_t* m) {
@@ -148,6 +164,7 @@ class BevBuilderApp {
     c.set("frames_late", s.frames_late);
     c.set("frames_no_pose", s.frames_no_pose);
     c.set("frames_queue_full", s.frames_queue_full);
+    c.set("frames_pending", static_cast<int64_t>(builder_.pendingFrames()));
     c.set("poses_received", s.poses_received);
     c.set("poses_invalid", s.poses_invalid);
     c.set("poses_out_of_order", s.poses_out_of_order);
@@ -170,6 +187,7 @@ class BevBuilderApp {
   std::unique_ptr<skeleton::Skeleton> skeleton_;
   bev::BevBuilder builder_;
   std::string store_;
+  std::map<int64_t, int64_t> received_;  // label utime -> recv_utime, frames not yet projected
 };
 
 }  // namespace

@@ -38,7 +38,10 @@ class Counters {
   std::map<std::string, int64_t> values_;
 };
 
-// Latencies (ms) of the last few hundred events, for p50/p99 in STATUS.
+// Latencies (ms) of the last 500 events, for p50/p99 in STATUS. lanemap's convention: from when
+// the input entered the process (lcm::ReceiveBuffer::recv_utime, the wall-clock time LCM's receive
+// thread got the message) to when its output is done, so queue waits count; never now - msg.utime,
+// which is meaningless on a replayed log. Each process's header says what its input and output are.
 class LatencyWindow {
  public:
   void add(double ms);

@@ -4,6 +4,10 @@
 // <store>/lane_map.osm) and publishes LANE_MAP. On start it reloads the store and republishes it, so
 // a restart loses no finished road.
 //
+// STATUS latency (per road): from the BEV_ROAD message's receive time (lcm::ReceiveBuffer::recv_utime)
+// to its LANE_MAP published: the wait behind other roads, loading the grid, lane exploration and
+// rewriting lane_map.osm. map_road_ms_max: exploring one road and writing its files, the worst road.
+//
 //   lanemap-lane-mapper --config config/lane_mapper.yaml [--osm FILE] [--store DIR]
 #include "core/bev/bev_grid.h"
 #include "core/io/lanelet2.h"
@@ -15,6 +19,8 @@
 #include "processes/framework/channels.h"
 #include "processes/framework/process.h"
 
+#include <algorithm>
+#include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <filesystem>
@@ -84,11 +90,11 @@ class LaneMapperApp {
   }
 
  private:
-  void onBevRoad(const lcm::ReceiveBuffer*, const std::string&, const bev_road_t* msg) {
+  void onBevRoad(const lcm::ReceiveBuffer* rbuf, const std::string&, const bev_road_t* msg) {
     process_.counters().add("bev_roads_received");
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      jobs_.push_back(*msg);
+      jobs_.push_back(Job{*msg, rbuf->recv_utime});
       process_.counters().set("queue_length", static_cast<int64_t>(jobs_.size()));
     }
     cv_.notify_one();
@@ -96,7 +102,7 @@ class LaneMapperApp {
 
   void work() {
     for (;;) {
-      bev_road_t job;
+      Job job;
       {
         std::unique_lock<std::mutex> lock(mutex_);
         cv_.wait(lock, [this] { return stop_ || !jobs_.empty(); });
@@ -106,10 +112,11 @@ class LaneMapperApp {
         process_.counters().set("queue_length", static_cast<int64_t>(jobs_.size()));
       }
       try {
-        mapRoad(job);
+        mapRoad(job.road);
+        process_.latency().add(static_cast<double>(nowUtime() - job.recv_utime) * 1e-3);
       } catch (const std::exception& e) {
         process_.counters().add("roads_failed");
-        std::cerr << "lane_mapper: road " << job.road_id << ": " << e.what() << "\n";
+        std::cerr << "lane_mapper: road " << job.road.road_id << ": " << e.what() << "\n";
       }
     }
   }
@@ -128,7 +135,9 @@ class LaneMapperApp {
       roads_[job.road_id] = m;
       writeWholeMap();
     }
-    process_.latency().add(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    const double map_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    map_road_ms_max_ = std::max(map_road_ms_max_, map_ms);
+    process_.counters().set("map_road_ms_max", static_cast<int64_t>(map_road_ms_max_ + 0.5));
     process_.counters().add("roads_mapped");
     process_.counters().add("lanes_found", static_cast<int64_t>(res.lanes.size()));
     publish(job.road_id, m, job.utime);
@@ -198,7 +207,12 @@ class LaneMapperApp {
   std::string store_;
   std::mutex mutex_, roads_mutex_, publish_mutex_;
   std::condition_variable cv_;
-  std::deque<bev_road_t> jobs_;
+  struct Job {
+    bev_road_t road;
+    int64_t recv_utime = 0;  // when LCM received the BEV_ROAD (wall clock)
+  };
+  std::deque<Job> jobs_;
+  double map_road_ms_max_ = 0.0;  // worker thread only
   bool stop_ = false;
   std::map<int64_t, map::LaneMap> roads_;
   intersections::IntersectionOptions intersection_options_;

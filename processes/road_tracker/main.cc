@@ -1,6 +1,8 @@
 // lanemap-road-tracker: map-matches POSE messages to the OSM skeleton M0 and publishes ROAD_EVENT
 // (entered road / reached intersection / left map / wrong way / pose lost). A thin wrapper over
-// core/tracking/road_tracker.h; counters in STATUS.
+// core/tracking/road_tracker.h; counters in STATUS. STATUS latency (last 500 poses, ~5 s): from a
+// POSE's receive time (lcm::ReceiveBuffer::recv_utime) to the end of its handling, its events
+// published: LCM queue wait + map matching.
 //
 //   lanemap-road-tracker --config config/road_tracker.yaml [--osm data/osm/west-oakland.osm]
 #include "core/skeleton/skeleton.h"
@@ -8,6 +10,7 @@
 #include "lanemap/pose_t.hpp"
 #include "lanemap/road_event_t.hpp"
 #include "processes/framework/channels.h"
+#include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
 
 #include <cmath>
@@ -34,21 +37,10 @@ class RoadTrackerApp {
   }
 
  private:
-  void onPose(const lcm::ReceiveBuffer*, const std::string&, const lanemap::pose_t* msg) {
+  void onPose(const lcm::ReceiveBuffer* rbuf, const std::string&, const lanemap::pose_t* msg) {
     auto& counters = process_.counters();
     counters.add("poses_received");
-    lanemap::tracking::PoseInput pose;
-    pose.utime = msg->utime;
-    pose.valid = msg->status != lanemap::pose_t::STATUS_INVALID && std::isfinite(msg->latitude) &&
-                 std::isfinite(msg->longitude);
-    if (pose.valid) {
-      pose.position = skeleton_->frame().toEnu(msg->latitude, msg->longitude, msg->altitude).head<2>();
-      // Orientation rotates vehicle -> ENU: the vehicle x axis in ENU is R's first column.
-      const double w = msg->orientation[0], x = msg->orientation[1], y = msg->orientation[2],
-                   z = msg->orientation[3];
-      pose.heading = std::atan2(2.0 * (x * y + w * z), 1.0 - 2.0 * (y * y + z * z));
-      pose.velocity = Eigen::Vector2d(msg->velocity_enu[0], msg->velocity_enu[1]);
-    }
+    const lanemap::tracking::PoseInput pose = lanemap::toPoseInput(lanemap::toEnuPose(*msg, skeleton_->frame()));
     for (const auto& e : tracker_.update(pose)) publish(e);
     const auto& stats = tracker_.stats();
     counters.set("poses_invalid", stats.invalid);
@@ -56,7 +48,7 @@ class RoadTrackerApp {
     counters.set("filter_resets", stats.filter_resets);
     counters.set("rematches", stats.rematches);
     counters.set("current_road", tracker_.currentRoad());
-    process_.latency().add((lanemap::nowUtime() - msg->utime) * 1e-3);
+    process_.latency().add(static_cast<double>(lanemap::nowUtime() - rbuf->recv_utime) * 1e-3);
   }
 
   void publish(const lanemap::tracking::RoadEvent& e) {

@@ -11,6 +11,14 @@
 // --oracle republishes the simulator's SEMANTIC_FRONT_TRUTH as SEMANTIC_FRONT (ablations: the
 // pipeline on perfect labels); no model is loaded.
 //
+// STATUS latency (p50/p99 of the last 500 frames) is this process's share of frame-to-BEV: from the
+// input message's receive time (lcm::ReceiveBuffer::recv_utime of CAMERA_FRONT, or of
+// SEMANTIC_FRONT_TRUTH with --oracle; wall clock, taken by LCM's receive thread) to the moment its
+// SEMANTIC_FRONT is published. With the model that includes the wait in LCM's queue and in the
+// frame queue, JPEG decode, inference and PNG encode; dropped frames have none. The bev_builder's
+// latency (labels received -> projected) is the rest of camera-to-BEV. (Not now - msg.utime: a
+// replayed log keeps its recording's utimes.)
+//
 //   lanemap-segmenter --config config/segmenter.yaml [--model FILE.onnx] [--oracle]
 //
 // Offline (no LCM traffic): --log-in drive.lcmlog --log-out out.lcmlog copies every event of the
@@ -52,6 +60,12 @@ struct Settings {
   int debug_delay_ms = 0;
 };
 
+// A camera frame and when LCM received it (wall clock, microseconds).
+struct ReceivedFrame {
+  image_t msg;
+  int64_t recv_utime = 0;
+};
+
 // Model mode: camera frames -> queue -> worker (decode, segment, publish).
 class SegmenterApp {
  public:
@@ -71,10 +85,10 @@ class SegmenterApp {
   }
 
  private:
-  void onImage(const lcm::ReceiveBuffer*, const std::string&, const image_t* msg) {
+  void onImage(const lcm::ReceiveBuffer* rbuf, const std::string&, const image_t* msg) {
     auto& c = process_.counters();
     c.add("frames_received");
-    const size_t dropped = queue_.push(*msg);
+    const size_t dropped = queue_.push(ReceivedFrame{*msg, rbuf->recv_utime});
     if (dropped) c.add("frames_dropped", static_cast<int64_t>(dropped));
     c.set("queue_max_depth", static_cast<int64_t>(queue_.maxDepth()));
   }
@@ -84,8 +98,9 @@ class SegmenterApp {
     double ms_sum = 0.0;
     int64_t n = 0;
     while (!stop_) {
-      std::optional<image_t> msg = queue_.pop(std::chrono::milliseconds(100));
-      if (!msg) continue;
+      std::optional<ReceivedFrame> frame = queue_.pop(std::chrono::milliseconds(100));
+      if (!frame) continue;
+      const image_t* msg = &frame->msg;
       const auto t0 = std::chrono::steady_clock::now();
       cv::Mat bgr;
       try {
@@ -128,20 +143,21 @@ class SegmenterApp {
       out.size = static_cast<int32_t>(out.data.size());
       out.source = model_->name();
       process_.lcm().publish(s_.output_channel, &out);
+      const int64_t published_utime = nowUtime();
       c.add("labels_published");
       const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       ms_sum += ms;
       ++n;
       c.set("segment_ms_last", static_cast<int64_t>(ms + 0.5));
       c.set("segment_ms_mean", static_cast<int64_t>(ms_sum / n + 0.5));
-      process_.latency().add((nowUtime() - msg->utime) * 1e-3);
+      process_.latency().add(static_cast<double>(published_utime - frame->recv_utime) * 1e-3);
     }
   }
 
   Process& process_;
   Settings s_;
   std::unique_ptr<seg::Segmenter> model_;
-  segmenter::DropOldestQueue<image_t> queue_;
+  segmenter::DropOldestQueue<ReceivedFrame> queue_;
   std::atomic<bool> stop_{false};
   int warnings_ = 0;
   std::thread worker_;
@@ -157,11 +173,11 @@ class OracleApp {
   }
 
  private:
-  void onTruth(const lcm::ReceiveBuffer*, const std::string&, const label_image_t* msg) {
+  void onTruth(const lcm::ReceiveBuffer* rbuf, const std::string&, const label_image_t* msg) {
     process_.counters().add("truth_received");
     process_.lcm().publish(s_.output_channel, msg);
+    process_.latency().add(static_cast<double>(nowUtime() - rbuf->recv_utime) * 1e-3);
     process_.counters().add("labels_published");
-    process_.latency().add((nowUtime() - msg->utime) * 1e-3);
   }
   Process& process_;
   Settings s_;

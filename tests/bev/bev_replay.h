@@ -10,6 +10,7 @@
 #include "lanemap/lidar_packets_t.hpp"
 #include "lanemap/pose_t.hpp"
 #include "processes/framework/channels.h"
+#include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
 
 #include <lcm/lcm-cpp.hpp>
@@ -42,18 +43,9 @@ struct Replay {
 };
 
 inline void feedPose(const pose_t& m, Replay& r, tracking::RoadTracker& tracker) {
-  bev::TimedPose p;
-  p.utime = m.utime;
-  p.position = r.sk->frame().toEnu(m.latitude, m.longitude, m.altitude);
-  p.orientation = Eigen::Quaterniond(m.orientation[0], m.orientation[1], m.orientation[2], m.orientation[3]);
-  r.builder->addPose(p);
-  tracking::PoseInput in;
-  in.utime = m.utime;
-  in.position = p.position.head<2>();
-  const Eigen::Vector3d x = p.orientation.toRotationMatrix().col(0);
-  in.heading = std::atan2(x.y(), x.x());
-  in.velocity = Eigen::Vector2d(m.velocity_enu[0], m.velocity_enu[1]);
-  for (const auto& e : tracker.update(in)) {
+  const EnuPose p = toEnuPose(m, r.sk->frame());
+  r.builder->addPose(toTimedPose(p));
+  for (const auto& e : tracker.update(toPoseInput(p))) {
     r.events.push_back(e);
     if (e.type == tracking::RoadEventType::kEnteredRoad) r.builder->roadEntered(e.road_id, e.utime);
     if (e.type == tracking::RoadEventType::kReachedIntersection) r.builder->roadClosed(e.road_id, e.utime);

@@ -7,6 +7,7 @@
 #include "core/tracking/road_tracker.h"
 #include "lanemap/pose_t.hpp"
 #include "processes/framework/channels.h"
+#include "processes/framework/pose_conversion.h"
 #include "tests/common/sim_drive.h"
 
 #include <gtest/gtest.h>
@@ -72,14 +73,7 @@ void checkDrive(uint64_t seed, int pose_stride = 1) {
     if (poses++ % pose_stride != 0) continue;
     pose_t msg{};
     ASSERT_GT(msg.decode(ev->data, 0, ev->datalen), 0);
-    tracking::PoseInput in;
-    in.utime = msg.utime;
-    in.position = sk.frame().toEnu(msg.latitude, msg.longitude, msg.altitude).head<2>();
-    const Eigen::Quaterniond q(msg.orientation[0], msg.orientation[1], msg.orientation[2], msg.orientation[3]);
-    const Eigen::Vector3d x = q * Eigen::Vector3d::UnitX();
-    in.heading = std::atan2(x.y(), x.x());
-    in.velocity = Eigen::Vector2d(msg.velocity_enu[0], msg.velocity_enu[1]);
-    for (auto& e : tracker.update(in)) events.push_back(e);
+    for (auto& e : tracker.update(toPoseInput(toEnuPose(msg, sk.frame())))) events.push_back(e);
   }
 
   ASSERT_GT(poses, 110 * 100) << "a 120 s drive has 100 Hz poses";

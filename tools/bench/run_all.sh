@@ -35,3 +35,8 @@ echo "== BEV builder: memory, 30 s drive vs 120 s drive"
 # Issue 7: the segmenter's frames/s at the camera resolution (640x360), OpenCV on 1 and 2 threads.
 echo "== segmenter: shipped model on 640x360 frames"
 "$bin/lanemap-bench-seg"
+
+# Issue 6: the live graph at 1x on the demo drive (60 s, seed 1), segmenter on the model and on the
+# truth labels: CPU share and latency per process, frame-to-BEV, drop counters, map completion.
+echo "== live graph at real time (lcm-logplayer 1x, demo.yaml, private netns): demo drive"
+tools/bench/live_graph.sh "$build"

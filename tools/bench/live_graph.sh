@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# The live graph at real time (issue 6): simulates the demo drive (scripts/demo.sh: West Oakland,
+# 60 s, seed 1) or takes --drive DIR, runs config/launch/demo.yaml through lanemap-launch with
+# lcm-logplayer at 1x inside a private network namespace, once with the segmenter on the shipped
+# model and once on the truth labels (--oracle), and prints what lanemap-graph-report reads from
+# the run's recording (STATUS, LANE_MAP, POSE): each process's CPU share (mean, max), latency
+# p50/p99, frame-to-BEV and camera-to-BEV latency, every drop counter and hand-over loss, and how
+# long after the drive's end the map was complete; plus the kernel's UDP receive-buffer overflows
+# in the namespace (a socket that could not keep up) and the CPU time of the whole launch
+# (lcm-logplayer and lcm-logger included, which report no STATUS). Figures only, no thresholds.
+#
+#   tools/bench/live_graph.sh BUILD_DIR [--drive DIR] [--modes "model oracle"]
+# Takes about 75 s per mode, plus about 2 min to simulate the drive.
+set -euo pipefail
+
+# Inside the private namespace: bring lo up, route multicast to it, run the command, then print
+# the namespace's UDP counters (RcvbufErrors: datagrams dropped because a socket buffer was full).
+if [ "${1:-}" = "--in-netns" ]; then
+  shift
+  ip link set lo up
+  ip route add 224.0.0.0/4 dev lo
+  rc=0
+  "$@" || rc=$?
+  awk '/^Udp:/ { if (!seen) { for (i = 2; i <= NF; i++) name[i] = $i; seen = 1 }
+                 else { for (i = 2; i <= NF; i++) if (name[i] == "RcvbufErrors" || name[i] == "InErrors") printf "   UDP %s in the namespace: %s\n", name[i], $i } }' /proc/net/snmp
+  exit $rc
+fi
+
+build=${1:-build}
+shift || true
+drive=""
+modes="model oracle"
+while [ $# -gt 0 ]; do
+  case $1 in
+    --drive) drive=$2; shift 2 ;;
+    --modes) modes=$2; shift 2 ;;
+    *) echo "usage: $0 BUILD_DIR [--drive DIR] [--modes \"model oracle\"]" >&2; exit 2 ;;
+  esac
+done
+bin=$(cd "$build/bin" && pwd)
+self=$(cd "$(dirname "$0")" && pwd)/$(basename "$0")
+root=$(cd "$(dirname "$0")/../.." && pwd)
+out=$(mktemp -d "${TMPDIR:-/tmp}/lanemap-live-graph.XXXXXX")
+trap 'rm -rf "$out"' EXIT
+
+if [ -z "$drive" ]; then
+  echo "   simulating the demo drive (60 s, seed 1)"
+  "$bin/lanemap-sim" -q --osm "$root/data/osm/west-oakland.osm" --out "$out/drive" --duration 60 --seed 1
+  drive=$out/drive
+fi
+drive=$(cd "$drive" && pwd)
+"$bin/lanemap-lcm-stats" --log "$drive/drive.lcmlog" | sed 's/^/   /'
+
+for mode in $modes; do
+  case $mode in
+    model) args="" ;;
+    oracle) args="--oracle" ;;
+    *) echo "unknown mode $mode (model, oracle)" >&2; exit 2 ;;
+  esac
+  echo "== live graph, segmenter on the $mode labels: lcm-logplayer at 1x, demo.yaml, private netns"
+  store=$out/$mode
+  mkdir -p "$store"
+  TIMEFORMAT="   whole launch (all processes, player and recorder included): wall %R s, CPU user %U s + sys %S s"
+  time unshare -rn "$self" --in-netns "$bin/lanemap-launch" "$root/config/launch/demo.yaml" --all-hosts \
+    --status-interval 0 --set drive="$drive" --set store="$store" --set segmenter_args="$args" \
+    --log-dir "$store/logs" > "$store/launch.out" 2>&1 || { echo "   launch failed:"; tail -n 20 "$store/launch.out"; exit 1; }
+  grep "UDP " "$store/launch.out" || true
+  "$bin/lanemap-graph-report" --log "$store/graph.lcmlog" --drive-log "$drive/drive.lcmlog" | sed 's/^/   /'
+done

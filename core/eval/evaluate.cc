@@ -442,12 +442,20 @@ EvalReport evaluate(const map::LaneMap& truth_map, const map::LaneMap& built_map
   for (const auto& [pair, path] : built.pairs) {
     const int ti = match_of_built[pair.first], to = match_of_built[pair.second];
     const auto tp = truth.pairs.find({ti, to});
+    PairDetail d{pair.first, pair.second, false, std::numeric_limits<double>::quiet_NaN()};
     if (ti >= 0 && to >= 0 && tp != truth.pairs.end()) {
       ++r.intersection_precision.hits;
       found_truth_pairs.insert({ti, to});
       const OverlapDistance od = overlapDistance(path, tp->second, o.sample_step_m);
       if (od.samples > 0) pair_rms.push_back(od.rms);
+      d.correct = true;
+      if (od.samples > 0) d.rms_m = od.rms;
     }
+    r.built_pairs.push_back(d);
+  }
+  for (const auto& [pair, path] : truth.pairs) {
+    r.truth_pairs.push_back({pair.first, pair.second, found_truth_pairs.count(pair) > 0,
+                             std::numeric_limits<double>::quiet_NaN()});
   }
   r.intersection_precision.total = built.pairs.size();
   r.intersection_recall = {found_truth_pairs.size(), truth.pairs.size()};
@@ -529,6 +537,21 @@ nlohmann::json toJson(const EvalReport& r) {
                         {"correct_pairs", r.intersection_precision.hits},
                         {"truth_lanelets", r.truth_intersection_lanelets},
                         {"built_lanelets", r.built_intersection_lanelets}};
+  // Every pair, its lanes named by road and first lanelet: which connections were missed or wrong.
+  const auto pairsJson = [&](const std::vector<PairDetail>& pairs, const std::vector<LaneInfo>& lanes) {
+    nlohmann::json out = nlohmann::json::array();
+    const auto lane = [&](int i) {
+      const LaneInfo& l = lanes.at(static_cast<size_t>(i));
+      return nlohmann::json{{"road_id", l.road_id}, {"from_node", l.from_node}, {"to_node", l.to_node},
+                            {"lanelet", l.lanelets.empty() ? -1 : l.lanelets.front()}};
+    };
+    for (const auto& p : pairs) {
+      out.push_back({{"in", lane(p.in_lane)}, {"out", lane(p.out_lane)}, {"correct", p.correct}, {"rms_m", num(p.rms_m)}});
+    }
+    return out;
+  };
+  j["intersections"]["truth_pair_detail"] = pairsJson(r.truth_pairs, r.truth_lanes);
+  j["intersections"]["built_pair_detail"] = pairsJson(r.built_pairs, r.built_lanes);
   j["lane_graph"] = {{"precision", num(r.graph_precision.value())},
                      {"recall", num(r.graph_recall.value())},
                      {"truth_edges", r.graph_recall.total},

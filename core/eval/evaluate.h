@@ -90,6 +90,14 @@ struct RoadDetail {
   double mean_iou = 0.0, mean_rms_m = 0.0;  // over the matched lanes (NaN when none)
 };
 
+// One (in lane, out lane) pair of an intersection; lanes are indices into the report's
+// truth_lanes (truth pairs) or built_lanes (built pairs).
+struct PairDetail {
+  int in_lane = -1, out_lane = -1;
+  bool correct = false;  // truth: found in the built map; built: a truth pair
+  double rms_m = 0.0;    // built and correct: its trajectory against the truth's (NaN otherwise)
+};
+
 struct ApResult {
   size_t truth_instances = 0, predictions = 0;
   std::map<double, double> ap;  // threshold -> AP (NaN without truth instances)
@@ -104,6 +112,7 @@ struct EvalReport {
   size_t truth_intersection_lanelets = 0, built_intersection_lanelets = 0;
   Ratio intersection_precision, intersection_recall;
   double intersection_rms_m = 0.0;  // NaN when no correct pair
+  std::vector<PairDetail> truth_pairs, built_pairs;
   Ratio graph_precision, graph_recall;
   ApResult ap_centre, ap_boundary;
   std::map<double, double> chamfer_ap;  // mean over classes

@@ -133,6 +133,12 @@ class Builder {
     for (const auto& ll : m.lanelets) {
       for (int64_t s : ll.successors) has_pred.insert(s);
     }
+    // Lane ends at this intersection: lanelets with no successor (incoming) or no predecessor
+    // (outgoing) within end_tolerance_m of the road's end; when none is, those within
+    // end_tolerance_m of the nearest one, if that is at most unseen_end_m away (the drive did not
+    // see the road's first or last metres, e.g. right after a turn).
+    std::vector<std::pair<const map::Lanelet*, Projection>> candidates;
+    double nearest = std::numeric_limits<double>::infinity();  // distance of a lane end from the edge
     for (const auto& ll : m.lanelets) {
       if (ll.kind != map::LaneletKind::kRoad || ll.centre.size() < 2) continue;
       if (ll.road_id >= 0 && ll.road_id != road_id) continue;
@@ -143,9 +149,16 @@ class Builder {
       } else if (has_pred.count(ll.id)) {
         continue;
       }
+      const Projection pr = project(road->polyline, (incoming ? ll.centre.back() : ll.centre.front()).head<2>());
+      candidates.emplace_back(&ll, pr);
+      nearest = std::min(nearest, std::max(0.0, incoming ? road->s_end - pr.s : pr.s - road->s_begin));
+    }
+    const double reach =
+        o_.end_tolerance_m + (nearest > o_.end_tolerance_m && nearest <= o_.unseen_end_m ? nearest : 0.0);
+    for (const auto& [llp, pr] : candidates) {
+      const map::Lanelet& ll = *llp;
+      if (incoming ? pr.s < road->s_end - reach : pr.s > road->s_begin + reach) continue;
       const Vector3d c = incoming ? ll.centre.back() : ll.centre.front();
-      const Projection pr = project(road->polyline, c.head<2>());
-      if (incoming ? pr.s < road->s_end - o_.end_tolerance_m : pr.s > road->s_begin + o_.end_tolerance_m) continue;
       LaneEnd e;
       e.lanelet = ll.id;
       e.centre = c;
@@ -327,6 +340,14 @@ class Builder {
       }
     }
     if (!o_.connect_orphan_lanes || !straightest) return;
+    // A lane with no connection may be headed for a way out that this map does not have (a road
+    // the drive never took): then it is not an orphan, and inventing a straight connection for it
+    // would be wrong.
+    for (int64_t rid : in_.outgoing) {
+      const skeleton::AtomicRoad* r = sk_.road(rid);
+      const bool mapped = std::any_of(outs_.begin(), outs_.end(), [&](const Approach& d) { return d.road->id == rid; });
+      if (r && !mapped && !isUturn(*a.road, *r)) return;
+    }
     const int nin = static_cast<int>(a.lanes.size()), nout = static_cast<int>(straightest->lanes.size());
     const TurnDirection movement = turnDirection(a.tangent, straightest->tangent, o_.straight_max_deg);
     for (int i = 0; i < nin; ++i) {
@@ -468,6 +489,7 @@ IntersectionOptions IntersectionOptions::fromYaml(const YAML::Node& node) {
       else if (k == "straight_max_deg") o.straight_max_deg = v.as<double>();
       else if (k == "uturn_min_deg") o.uturn_min_deg = v.as<double>();
       else if (k == "end_tolerance_m") o.end_tolerance_m = v.as<double>();
+      else if (k == "unseen_end_m") o.unseen_end_m = v.as<double>();
       else if (k == "lane_tangent_m") o.lane_tangent_m = v.as<double>();
       else if (k == "road_tangent_m") o.road_tangent_m = v.as<double>();
       else if (k == "pocket_min_m") o.pocket_min_m = v.as<double>();
@@ -492,6 +514,7 @@ void IntersectionOptions::validate() const {
   };
   check(straight_max_deg > 0.0 && straight_max_deg < 90.0, "straight_max_deg must be in (0, 90)");
   check(end_tolerance_m >= 0.0, "end_tolerance_m must be >= 0");
+  check(unseen_end_m >= 0.0, "unseen_end_m must be >= 0");
   check(lane_tangent_m > 0.0, "lane_tangent_m must be > 0");
   check(road_tangent_m > 0.0, "road_tangent_m must be > 0");
   check(pocket_min_m >= 0.0, "pocket_min_m must be >= 0");

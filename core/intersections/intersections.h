@@ -17,7 +17,8 @@
 //   does not list, are set aside first); a turn pocket with no tag is a turn lane (inner side:
 //   the turn across traffic, outer side: the other);
 // - a lane left with no connection continues into the straightest allowed way out (a lane drop
-//   merges rather than ending in the middle of the intersection).
+//   merges rather than ending in the middle of the intersection), when every way out of the
+//   intersection is in the map (otherwise it may be headed for a road the drive did not map).
 // Geometry: quadratic Bezier P0 -> P2 with P the tangents' intersection, cubic fallback (curve.h);
 // bounds: each its own connection curve from the incoming lane's bound end to the outgoing lane's
 // bound start (connectorBounds in curve.h), so end points are exactly the road lanelets' bound end
@@ -56,6 +57,9 @@ struct IntersectionOptions {
   // A lanelet with no successor on its road ends at the intersection when its end projects within
   // this of the road's s_end (for outgoing roads: starts within this of s_begin).
   double end_tolerance_m = 12.0;
+  // A road whose mapped lanes all end (start) farther than end_tolerance_m from the intersection,
+  // up to this far, still connects from its last (first) lanes: the drive did not see that part.
+  double unseen_end_m = 30.0;
   double lane_tangent_m = 3.0;     // a lane's end direction over its last (first) metres
   double road_tangent_m = 15.0;    // a road's direction over this much past its ROI edge
   double pocket_min_m = 10.0;      // a lane that starts this far into the road is a pocket

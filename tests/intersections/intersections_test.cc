@@ -337,6 +337,56 @@ TEST(IntersectionTopology, LaneDropMergesIntoTheStraightestRoad) {
   EXPECT_EQ(pairs(net, o).size(), 3u);
 }
 
+TEST(IntersectionTopology, NoOrphanMergeWhenAWayOutIsNotMapped) {
+  // The lane-drop crossing of the test above, but the drive never took the north road (1 <-> 3):
+  // lane 1 of the west road may be turning there, so it gets no invented straight connection.
+  Net net;
+  net.node(1, 0, 0);
+  net.node(3, 0, 120);
+  net.node(4, -120, 0);
+  net.node(5, 120, 0);
+  net.way(30, {4, 1}, {{"oneway", "yes"}, {"lanes", "2"}});
+  net.way(31, {1, 5}, {{"oneway", "yes"}, {"lanes", "1"}});
+  net.way(32, {1, 3});
+  const auto sk = net.build();
+  std::map<int64_t, lanemap::map::LaneMap> roads;
+  for (const auto& r : sk.roads()) {
+    if (r.from == 3 || r.to == 3) continue;
+    LaneSpec spec;
+    spec.lanes = laneCount(r);
+    roads[r.id] = roadLanes(sk, r, spec);
+  }
+  const auto res = buildIntersection(sk, 1, roads);
+  EXPECT_EQ(pairsOf(sk, res), (std::vector<Pair>{{4, 0, 5, 0}}));
+}
+
+TEST(IntersectionTopology, ARoadFirstSeenLateStillConnects) {
+  // The east road's lane starts 25 m from the junction (the camera saw nothing before): farther
+  // than end_tolerance_m (12 m) from the road's start, within unseen_end_m (30 m).
+  Net net;
+  net.node(1, 0, 0);
+  net.node(4, -120, 0);
+  net.node(5, 120, 0);
+  net.way(30, {4, 1}, {{"oneway", "yes"}});
+  net.way(31, {1, 5}, {{"oneway", "yes"}});
+  const auto sk = net.build();
+  std::map<int64_t, lanemap::map::LaneMap> roads;
+  for (const auto& r : sk.roads()) {
+    LaneSpec spec;
+    roads[r.id] = roadLanes(sk, r, spec);
+    if (r.from != 1) continue;
+    const auto late = [](const Eigen::Vector3d& p) { return p.x() < 25.0; };
+    auto& m = roads[r.id];
+    for (auto& l : m.lines) l.points.erase(std::remove_if(l.points.begin(), l.points.end(), late), l.points.end());
+    for (auto& ll : m.lanelets) ll.centre.erase(std::remove_if(ll.centre.begin(), ll.centre.end(), late), ll.centre.end());
+    ASSERT_NEAR(m.lanelets.front().centre.front().x(), 25.0, 1.0);
+  }
+  EXPECT_EQ(pairsOf(sk, buildIntersection(sk, 1, roads)), (std::vector<Pair>{{4, 0, 5, 0}}));
+  IntersectionOptions strict;
+  strict.unseen_end_m = 0.0;
+  EXPECT_TRUE(buildIntersection(sk, 1, roads, strict).connections.empty());
+}
+
 TEST(IntersectionTopology, LeftHandTrafficAlignsStraightLanesFromTheRight) {
   Net net;
   net.node(1, 0, 0);

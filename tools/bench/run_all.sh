@@ -40,3 +40,8 @@ echo "== segmenter: shipped model on 640x360 frames"
 # truth labels: CPU share and latency per process, frame-to-BEV, drop counters, map completion.
 echo "== live graph at real time (lcm-logplayer 1x, demo.yaml, private netns): demo drive"
 tools/bench/live_graph.sh "$build"
+
+# Issue 6's bar: three 150 s simulated drives mapped on the truth labels (oracle), scored against
+# the truth and pooled beside the paper's figures (about 15 minutes).
+echo "== oracle-label drives vs the paper (lanemap-sim -> lanemap-offline -> lanemap-eval)"
+tools/bench/oracle_drives.sh "$build" "$out/oracle"

@@ -90,7 +90,9 @@ TEST(LiveGraph, MapsTheDriveLikeTheOfflineRunner) {
   }
   for (const auto& loss : report.frameLosses()) EXPECT_EQ(loss.count, 0) << loss.what;
   for (const auto& loss : report.otherLosses()) {
-    if (loss.what.find("sweeps_replaced") == std::string::npos) EXPECT_EQ(loss.count, 0) << loss.what;
+    if (loss.what.find("sweeps_replaced") == std::string::npos) {
+      EXPECT_EQ(loss.count, 0) << loss.what;
+    }
   }
   EXPECT_EQ(report.process("segmenter")->counter("labels_published"), frames);
   EXPECT_EQ(report.process("bev_builder")->counter("frames_projected"), frames);

@@ -316,7 +316,8 @@ TEST(IntersectionTopology, TurnLanesSkipAPocketOsmDoesNotList) {
   EXPECT_EQ(from_south, sorted({{2, 0, 4, 0}, {2, 1, 3, 0}, {2, 2, 5, 0}}));
 }
 
-TEST(IntersectionTopology, LaneDropMergesIntoTheStraightestRoad) {
+// A two-lane one-way road from the west narrows to one lane east; a two-way road leaves north.
+Net laneDropCrossing() {
   Net net;
   net.node(1, 0, 0);
   net.node(3, 0, 120);
@@ -325,6 +326,11 @@ TEST(IntersectionTopology, LaneDropMergesIntoTheStraightestRoad) {
   net.way(30, {4, 1}, {{"oneway", "yes"}, {"lanes", "2"}});
   net.way(31, {1, 5}, {{"oneway", "yes"}, {"lanes", "1"}});
   net.way(32, {1, 3});
+  return net;
+}
+
+TEST(IntersectionTopology, LaneDropMergesIntoTheStraightestRoad) {
+  Net net = laneDropCrossing();
   const auto sk = net.build();
   const auto r = run(net);
   const std::vector<Pair> expected = sorted({{4, 0, 5, 0}, {4, 0, 3, 0}, {4, 1, 5, 0}, {3, 0, 5, 0}});
@@ -340,14 +346,7 @@ TEST(IntersectionTopology, LaneDropMergesIntoTheStraightestRoad) {
 TEST(IntersectionTopology, NoOrphanMergeWhenAWayOutIsNotMapped) {
   // The lane-drop crossing of the test above, but the drive never took the north road (1 <-> 3):
   // lane 1 of the west road may be turning there, so it gets no invented straight connection.
-  Net net;
-  net.node(1, 0, 0);
-  net.node(3, 0, 120);
-  net.node(4, -120, 0);
-  net.node(5, 120, 0);
-  net.way(30, {4, 1}, {{"oneway", "yes"}, {"lanes", "2"}});
-  net.way(31, {1, 5}, {{"oneway", "yes"}, {"lanes", "1"}});
-  net.way(32, {1, 3});
+  Net net = laneDropCrossing();
   const auto sk = net.build();
   std::map<int64_t, lanemap::map::LaneMap> roads;
   for (const auto& r : sk.roads()) {

@@ -178,9 +178,6 @@ struct CrossSection {
   }
 };
 
-// One end of a cross-section: (its key, the end at s = 0).
-using TrimKey = std::pair<int64_t, bool>;
-
 // End of a lane at an intersection.
 struct LaneEnd {
   int64_t lanelet = -1;
@@ -368,16 +365,8 @@ class Builder {
       degree_[in.id] = static_cast<int>(xset.size());
       double rmax = 0.0;
       for (int64_t x : xset) rmax = std::max(rmax, xss_[x].halfWidth());
-      const double trim = in.dead_end ? 0.0 : rmax + 1.0;
-      for (int64_t x : xset) {
-        if (xss_[x].ref->from == in.id) trim_[{x, true}] = trim;
-        if (xss_[x].ref->to == in.id) trim_[{x, false}] = trim;
-      }
+      min_trim_[in.id] = in.dead_end ? 0.0 : rmax + 1.0;
     }
-  }
-  double trimAt(int64_t xs, bool at_start) const {
-    const auto it = trim_.find({xs, at_start});
-    return it == trim_.end() ? 0.0 : it->second;
   }
   int degree(int64_t node) const {
     auto it = degree_.find(node);
@@ -455,8 +444,8 @@ class Builder {
     }
     sb *= L / raw;
     se *= L / raw;
-    sb = std::max(sb, trimAt(xs.key, true));
-    se = std::min(se, L - trimAt(xs.key, false));
+    sb = std::max(sb, min_trim_[xs.ref->from]);
+    se = std::min(se, L - min_trim_[xs.ref->to]);
     constexpr double kMin = 4.0;
     if (se - sb < kMin) {
       const double mid = std::clamp((sb + se) / 2.0, 0.0, L);
@@ -1609,7 +1598,7 @@ class Builder {
   std::vector<CrossSection> xss_;
   std::unordered_map<int64_t, int64_t> xs_of_road_;
   std::unordered_map<int64_t, int> degree_;
-  std::map<TrimKey, double> trim_;  // (cross-section, at its start) -> trim at that junction
+  std::unordered_map<int64_t, double> min_trim_;
   std::unordered_map<int64_t, std::pair<bool, int>> lanelet_meta_;  // pocket, position
   std::unordered_map<int64_t, size_t> lanelet_pos_, line_pos_;
   std::map<int64_t, std::vector<Approach>> incoming_, outgoing_;

@@ -44,7 +44,7 @@ std::array<double, 3> triple(const YAML::Node& node, const char* key, std::array
 
 ModelConfig ModelConfig::fromYaml(const YAML::Node& node, const std::string& base_dir) {
   if (!node || !node.IsMap()) throw ModelError("model config: expected a map with at least 'path'");
-  static const char* kKeys[] = {"path", "name", "input_width", "input_height", "rgb", "scale", "mean",
+  static const char* kKeys[] = {"path", "name", "input_width", "input_height", "crop_top", "rgb", "scale", "mean",
                                 "std", "output", "class_map", "upsample"};
   for (const auto& kv : node) {
     const std::string k = kv.first.as<std::string>();
@@ -64,6 +64,8 @@ ModelConfig ModelConfig::fromYaml(const YAML::Node& node, const std::string& bas
   c.input_height = get<int>(node, "input_height", c.input_height);
   if (c.input_width < 8 || c.input_height < 8 || c.input_width > 8192 || c.input_height > 8192)
     throw ModelError("model config: input_width/input_height must be in [8, 8192]");
+  c.crop_top = get<int>(node, "crop_top", c.crop_top);
+  if (c.crop_top < 0 || c.crop_top > 8192) throw ModelError("model config: crop_top must be in [0, 8192] rows");
   c.rgb = get<bool>(node, "rgb", c.rgb);
   c.scale = get<double>(node, "scale", c.scale);
   c.mean = triple(node, "mean", c.mean);
@@ -147,6 +149,17 @@ Segmenter::~Segmenter() = default;
 
 cv::Mat Segmenter::segment(const cv::Mat& bgr) {
   if (bgr.empty() || bgr.type() != CV_8UC3) throw FrameError("segment: need a BGR CV_8UC3 image");
+  const int top = config_.crop_top;
+  if (top == 0) return segmentRegion(bgr);
+  if (bgr.rows < top + 8)
+    throw FrameError("segment: a frame of " + std::to_string(bgr.rows) + " rows has nothing below the model's crop_top " +
+                     std::to_string(top));
+  cv::Mat labels(bgr.size(), CV_8UC1, cv::Scalar(0));
+  segmentRegion(bgr.rowRange(top, bgr.rows)).copyTo(labels.rowRange(top, bgr.rows));
+  return labels;
+}
+
+cv::Mat Segmenter::segmentRegion(const cv::Mat& bgr) {
   const int W = config_.input_width, H = config_.input_height;
   cv::Mat resized;
   const bool shrink = bgr.cols >= W && bgr.rows >= H;

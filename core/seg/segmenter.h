@@ -38,6 +38,8 @@ struct ModelConfig {
                                      // when read by fromYaml with a base folder)
   std::string name;                  // label_image_t.source; default: the file's stem
   int input_width = 320, input_height = 176;
+  int crop_top = 0;                  // frame rows at the top the model never sees (the sky): they are
+                                     // labelled background, the rest is resized to the input size
   bool rgb = true;                   // the model takes RGB (false: BGR, OpenCV's order)
   double scale = 1.0 / 255.0;        // pixel (0-255) * scale ...
   std::array<double, 3> mean{{0.0, 0.0, 0.0}};  // ... - mean ... (in the model's channel order)
@@ -49,7 +51,7 @@ struct ModelConfig {
   bool upsample_scores = true;       // bilinear scores to the frame size, then argmax (false:
                                      // argmax at the model's size, nearest-neighbour upsampling)
 
-  // Keys: path, name, input_width, input_height, rgb, scale, mean, std, output (scores|labels),
+  // Keys: path, name, input_width, input_height, crop_top, rgb, scale, mean, std, output (scores|labels),
   // class_map, upsample (scores|labels). Relative paths resolve against base_dir (if not empty)
   // when the file is not found as given. Throws ModelError naming the key.
   static ModelConfig fromYaml(const YAML::Node& node, const std::string& base_dir = "");
@@ -64,8 +66,8 @@ class Segmenter {
   Segmenter(const Segmenter&) = delete;
   Segmenter& operator=(const Segmenter&) = delete;
 
-  // BGR CV_8UC3 frame of any size -> CV_8UC1 lanemap classes of the same size. Not thread-safe
-  // (one Segmenter per thread).
+  // BGR CV_8UC3 frame of any size -> CV_8UC1 lanemap classes of the same size. Throws FrameError
+  // when the frame is not taller than crop_top + 8 rows. Not thread-safe (one Segmenter per thread).
   cv::Mat segment(const cv::Mat& bgr);
 
   const ModelConfig& config() const { return config_; }
@@ -73,6 +75,8 @@ class Segmenter {
   int modelClasses() const { return model_classes_; }
 
  private:
+  cv::Mat segmentRegion(const cv::Mat& bgr);  // the model's classes for all of bgr
+
   struct Impl;
   ModelConfig config_;
   std::unique_ptr<Impl> impl_;

@@ -28,6 +28,22 @@ seg::ModelConfig shippedModel() {
   return seg::ModelConfig::fromYaml(YAML::LoadFile(kRoot + "/config/segmenter.yaml")["model"], kRoot);
 }
 
+// One rendered West Oakland camera frame (not a training network).
+cv::Mat oneFrame(uint64_t seed) {
+  seg::SimFrameOptions o;
+  o.osm_path = kRoot + "/data/osm/west-oakland.osm";
+  o.vehicle_yaml = kRoot + "/config/vehicle.yaml";
+  o.seed = seed;
+  o.max_frames = 1;
+  o.frame_spacing_s = 5.0;
+  cv::Mat img;
+  seg::renderSimFrames(o, [&](const seg::SimFrame& f) {
+    img = f.bgr;
+    return false;
+  });
+  return img;
+}
+
 }  // namespace
 
 TEST(SegModel, IouOnHeldOutWestOakland) {
@@ -121,17 +137,7 @@ TEST(SegModel, ClassMapRemapsClasses) {
   seg::Segmenter ident(c);
   c.class_map = {9, 3, 9, 9, 9, 9, 9, 9, 9, 9, 9};
   seg::Segmenter mapped(c);
-  seg::SimFrameOptions o;
-  o.osm_path = kRoot + "/data/osm/west-oakland.osm";
-  o.vehicle_yaml = kRoot + "/config/vehicle.yaml";
-  o.seed = 4243;
-  o.max_frames = 1;
-  o.frame_spacing_s = 5.0;
-  cv::Mat img;
-  seg::renderSimFrames(o, [&](const seg::SimFrame& f) {
-    img = f.bgr;
-    return false;
-  });
+  const cv::Mat img = oneFrame(4243);
   ASSERT_FALSE(img.empty());
   const cv::Mat a = ident.segment(img), b = mapped.segment(img);
   int n = 0;
@@ -143,6 +149,31 @@ TEST(SegModel, ClassMapRemapsClasses) {
     }
   std::printf("ego-lane pixels remapped: %d\n", n);
   EXPECT_GT(n, 5000);  // a road frame: the ego lane is a good part of the image
+}
+
+TEST(SegModel, CropTopRowsAreBackgroundAndTheRestIsTheModelsView) {
+  // With crop_top K the model sees only the frame below row K: the labels there are exactly those of
+  // the same model run (without a crop) on that part of the frame, and every row above is background.
+  seg::ModelConfig c = shippedModel();
+  const int k = 100;
+  c.crop_top = 0;
+  seg::Segmenter whole(c);
+  c.crop_top = k;
+  seg::Segmenter cropped(c);
+  const cv::Mat img = oneFrame(4244);
+  ASSERT_FALSE(img.empty());
+  const cv::Mat labels = cropped.segment(img);
+  ASSERT_EQ(labels.size(), img.size());
+  EXPECT_EQ(cv::countNonZero(labels.rowRange(0, k)), 0);
+  const cv::Mat below = whole.segment(img.rowRange(k, img.rows).clone());
+  EXPECT_EQ(cv::countNonZero(labels.rowRange(k, img.rows) != below), 0);
+  EXPECT_GT(cv::countNonZero(below), below.total() / 4);  // the road: not a blank answer
+  try {
+    cropped.segment(img.rowRange(0, k + 7).clone());
+    FAIL() << "no error";
+  } catch (const seg::FrameError& e) {
+    EXPECT_NE(std::string(e.what()).find("crop_top 100"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SegConfig, ErrorsNameTheKey) {
@@ -160,6 +191,8 @@ TEST(SegConfig, ErrorsNameTheKey) {
   EXPECT_NE(err("{path: m.onnx, std: [1, 0, 1]}").find("'std'"), std::string::npos);
   EXPECT_NE(err("{path: m.onnx, mean: [1, 2]}").find("'mean' must be 3 numbers"), std::string::npos);
   EXPECT_NE(err("{path: m.onnx, input_width: 2}").find("input_width"), std::string::npos);
+  EXPECT_NE(err("{path: m.onnx, crop_top: -1}").find("crop_top"), std::string::npos);
+  EXPECT_EQ(seg::ModelConfig::fromYaml(YAML::Load("{path: m.onnx, crop_top: 120}")).crop_top, 120);
   const auto c = seg::ModelConfig::fromYaml(YAML::Load("{path: models/lanesegnet.onnx, mean: 0.5, upsample: labels}"), kRoot);
   EXPECT_EQ(c.path, kRoot + "/models/lanesegnet.onnx");  // resolved against the base folder
   EXPECT_EQ(c.name, "lanesegnet");

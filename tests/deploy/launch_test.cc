@@ -41,19 +41,30 @@ TEST(Launch, CarConfigurationPlacesDriversMappingAndRecordingOnTheirHosts) {
   ASSERT_NE(sensors, std::string::npos) << r.output;
   ASSERT_NE(mapping, std::string::npos) << r.output;
   const auto camera = r.output.find(binPath("lanemap-camera-v4l2") + " --config config/camera_v4l2.yaml");
-  const auto tracker = r.output.find(binPath("lanemap-road-tracker") + " --config config/road_tracker.yaml");
+  const auto seg = r.output.find(binPath("lanemap-segmenter") + " --config config/segmenter.yaml");
+  const auto tracker = r.output.find(binPath("lanemap-road-tracker") + " --osm data/osm/west-oakland.osm --config config/road_tracker.yaml");
+  const auto bev = r.output.find(binPath("lanemap-bev-builder") + " --osm data/osm/west-oakland.osm --store map-store");
+  const auto lanes = r.output.find(binPath("lanemap-lane-mapper") + " --osm data/osm/west-oakland.osm --store map-store");
   ASSERT_NE(camera, std::string::npos) << r.output;
+  ASSERT_NE(seg, std::string::npos) << r.output;
   ASSERT_NE(tracker, std::string::npos) << r.output;
+  ASSERT_NE(bev, std::string::npos) << r.output;
+  ASSERT_NE(lanes, std::string::npos) << r.output;
   EXPECT_TRUE(camera > sensors && camera < segmenter) << r.output;
-  EXPECT_GT(tracker, mapping) << r.output;
+  EXPECT_TRUE(seg > segmenter && seg < mapping) << r.output;
+  EXPECT_TRUE(tracker > mapping && bev > mapping && lanes > mapping) << r.output;
   EXPECT_NE(r.output.find("lcm_url udpm://239.255.76.67:7667?ttl=1&recv_buf_size=8388608"), std::string::npos);
   // The binaries it names exist (the ones built today).
-  for (const char* b : {"lanemap-camera-v4l2", "lanemap-lidar-vlp16", "lanemap-pose-nmea", "lanemap-road-tracker"}) {
+  for (const char* b : {"lanemap-camera-v4l2", "lanemap-lidar-vlp16", "lanemap-pose-nmea", "lanemap-segmenter",
+                        "lanemap-road-tracker", "lanemap-bev-builder", "lanemap-lane-mapper"}) {
     EXPECT_TRUE(std::filesystem::exists(binPath(b))) << b;
   }
   const auto dry = runCommand(launchBin() + " " + LANEMAP_SOURCE_DIR + "/config/launch/car.yaml --host mapping --dry-run");
   ASSERT_EQ(dry.exit_code, 0) << dry.output;
-  EXPECT_EQ(dry.output, "mapping/road_tracker: " + binPath("lanemap-road-tracker") + " --config config/road_tracker.yaml\n");
+  EXPECT_EQ(std::count(dry.output.begin(), dry.output.end(), '\n'), 3) << dry.output;
+  EXPECT_EQ(dry.output.rfind("mapping/road_tracker: " + binPath("lanemap-road-tracker") +
+                                 " --osm data/osm/west-oakland.osm --config config/road_tracker.yaml\n", 0), 0u)
+      << dry.output;
   // LANEMAP_HOST picks the host when --host is not given.
   const auto env = runCommand("LANEMAP_HOST=sensors " + launchBin() + " " + LANEMAP_SOURCE_DIR +
                               "/config/launch/car.yaml --dry-run");

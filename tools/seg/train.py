@@ -5,9 +5,12 @@ exports it to ONNX.
 
   /usr/bin/python3 tools/seg/train.py --train DIR [DIR ...] --val DIR --out models/lanesegnet.onnx
 
-Each DIR holds index.csv, images/*.jpg, labels/*.png. Input: the JPEG resized (INTER_AREA) to
---width x --height, RGB, (pixel / 255 - 0.5) / 0.25. Loss: class-weighted cross-entropy of the
-logits upsampled x2 (bilinear) against the labels sampled at the input grid's pixel centres.
+Each DIR holds index.csv, images/*.jpg, labels/*.png. Input: the JPEG below its top --crop-top rows
+(the sky: no class is ever there; the segmenter labels them background) resized (INTER_AREA) to
+--width x --height, RGB, (pixel / 255 - 0.5) / 0.25. Loss: class-weighted cross-entropy (plus
+--dice times a soft Dice loss over the classes present in the batch) of the logits (v2: at the
+input resolution; --logits half: v1's, upsampled x2, bilinear) against the labels sampled at the
+input grid's pixel centres.
 AdamW, warm-up then cosine learning rate over --steps (or over --max-minutes when that comes
 first: the schedule anneals fully either way; the step count is then machine dependent). Writes <out> and <out minus .onnx>.json
 (validation per-class IoU, timings, settings).
@@ -39,7 +42,7 @@ def centre_indices(n_out, n_in):
     return np.clip(np.round((np.arange(n_out) + 0.5) * n_in / n_out - 0.5).astype(int), 0, n_in - 1)
 
 
-def load_set(dirs, width, height, keep_full_labels):
+def load_set(dirs, width, height, crop_top, keep_full_labels):
     xs, ys, full, names = [], [], [], []
     for d in dirs:
         with open(os.path.join(d, "index.csv")) as f:
@@ -49,14 +52,22 @@ def load_set(dirs, width, height, keep_full_labels):
             lab = cv2.imread(os.path.join(d, "labels", r["name"] + ".png"), cv2.IMREAD_UNCHANGED)
             if img is None or lab is None:
                 raise RuntimeError("cannot read frame %s in %s" % (r["name"], d))
-            small = cv2.cvtColor(cv2.resize(img, (width, height), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2RGB)
-            xs.append(small)
-            yi, xi = centre_indices(height, lab.shape[0]), centre_indices(width, lab.shape[1])
-            ys.append(lab[np.ix_(yi, xi)])
+            if img.shape[:2] != lab.shape[:2] or img.shape[0] < crop_top + 16:
+                raise RuntimeError("frame %s in %s: image %s, labels %s, --crop-top %d" %
+                                   (r["name"], d, img.shape[:2], lab.shape[:2], crop_top))
+            xs.append(model_input(img, width, height, crop_top))
+            road = lab[crop_top:]
+            yi, xi = centre_indices(height, road.shape[0]), centre_indices(width, road.shape[1])
+            ys.append(road[np.ix_(yi, xi)])
             if keep_full_labels:
                 full.append((img, lab))
             names.append(r["name"])
     return np.stack(xs), np.stack(ys), full, names
+
+
+def model_input(bgr, width, height, crop_top):
+    """What the segmenter gives the model: the frame below crop_top, resized (INTER_AREA), RGB."""
+    return cv2.cvtColor(cv2.resize(bgr[crop_top:], (width, height), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2RGB)
 
 
 def to_input(rgb_u8):
@@ -76,18 +87,22 @@ def ious(cm):
         return np.where(union > 0, tp / union, np.nan)
 
 
-def evaluate_cv_dnn(onnx_path, frames, width, height):
-    """Per-class IoU at the camera resolution, through cv2.dnn as the C++ segmenter runs the model."""
+def evaluate_cv_dnn(onnx_path, frames, width, height, crop_top):
+    """Per-class IoU at the camera resolution, through cv2.dnn as the C++ segmenter runs the model
+    (rows above crop_top are background)."""
     net = cv2.dnn.readNetFromONNX(onnx_path)
     cm = np.zeros((NUM_CLASSES, NUM_CLASSES), np.int64)
     t0 = time.time()
     for img, lab in frames:
-        small = cv2.cvtColor(cv2.resize(img, (width, height), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2RGB)
+        small = model_input(img, width, height, crop_top)
         blob = ((small.astype(np.float32) / 255.0 - MEAN) / STD).transpose(2, 0, 1)[None].copy()
         net.setInput(blob)
         out = net.forward()[0]
-        up = np.stack([cv2.resize(c, (img.shape[1], img.shape[0]), interpolation=cv2.INTER_LINEAR) for c in out])
-        cm += confusion(lab, up.argmax(0))
+        road = img.shape[0] - crop_top
+        up = np.stack([cv2.resize(c, (img.shape[1], road), interpolation=cv2.INTER_LINEAR) for c in out])
+        pred = np.zeros(lab.shape, np.int64)
+        pred[crop_top:] = up.argmax(0)
+        cm += confusion(lab, pred)
     return cm, (time.time() - t0) / max(1, len(frames))
 
 
@@ -96,8 +111,13 @@ def main():
     ap.add_argument("--train", nargs="+", required=True)
     ap.add_argument("--val", nargs="+", required=True)
     ap.add_argument("--out", required=True)
-    ap.add_argument("--width", type=int, default=256)
-    ap.add_argument("--height", type=int, default=144)
+    ap.add_argument("--width", type=int, default=480)
+    ap.add_argument("--height", type=int, default=176)
+    ap.add_argument("--crop-top", type=int, default=120,
+                    help="camera rows above the road not given to the model (segmenter: model.crop_top)")
+    ap.add_argument("--logits", choices=["full", "half"], default="full",
+                    help="full: logits at the input resolution (v2); half: at 1/2 (v1)")
+    ap.add_argument("--dice", type=float, default=0.0, help="weight of the soft Dice loss added to cross-entropy")
     ap.add_argument("--steps", type=int, default=900)
     ap.add_argument("--batch", type=int, default=8)
     ap.add_argument("--lr", type=float, default=4e-3)
@@ -116,8 +136,8 @@ def main():
     random.seed(args.seed)
 
     t_load = time.time()
-    xtr, ytr, _, names = load_set(args.train, args.width, args.height, False)
-    xva, yva, val_full, _ = load_set(args.val, args.width, args.height, True)
+    xtr, ytr, _, names = load_set(args.train, args.width, args.height, args.crop_top, False)
+    xva, yva, val_full, _ = load_set(args.val, args.width, args.height, args.crop_top, True)
     print("train %d frames, val %d frames, loaded in %.0f s" % (len(xtr), len(xva), time.time() - t_load), flush=True)
 
     freq = np.bincount(ytr.ravel(), minlength=NUM_CLASSES).astype(float)
@@ -129,7 +149,23 @@ def main():
     print("class weights  ", np.round(weights, 2).tolist(), flush=True)
     wt = torch.tensor(weights, dtype=torch.float32)
 
-    net = LaneSegNet()
+    net = LaneSegNet(logits=args.logits)
+
+    def forward_full(x):
+        out = net(x)
+        return out if args.logits == "full" else F.interpolate(out, scale_factor=2.0, mode="bilinear",
+                                                               align_corners=False)
+
+    def dice_loss(logits, y):
+        # 1 - soft Dice per class, averaged over the foreground classes present in the batch.
+        p = torch.softmax(logits, 1)
+        onehot = F.one_hot(y, NUM_CLASSES).permute(0, 3, 1, 2).float()
+        inter = (p * onehot).sum((0, 2, 3))
+        card = p.sum((0, 2, 3)) + onehot.sum((0, 2, 3))
+        present = onehot.sum((0, 2, 3))[1:] > 0
+        d = 1.0 - (2.0 * inter[1:] + 1.0) / (card[1:] + 1.0)
+        return d[present].mean() if bool(present.any()) else logits.sum() * 0.0
+
     opt = torch.optim.AdamW(net.parameters(), lr=args.lr, weight_decay=args.weight_decay)
 
     def progress(step):
@@ -152,8 +188,7 @@ def main():
         cm = np.zeros((NUM_CLASSES, NUM_CLASSES), np.int64)
         with torch.no_grad():
             for i in range(0, len(xva), 16):
-                logits = F.interpolate(net(to_input(xva[i:i + 16])), scale_factor=2.0, mode="bilinear",
-                                       align_corners=False)
+                logits = forward_full(to_input(xva[i:i + 16]))
                 cm += confusion(yva[i:i + 16], logits.argmax(1).numpy())
         net.train()
         return ious(cm)
@@ -182,8 +217,10 @@ def main():
         y = torch.from_numpy(ytr[idx]).long()
         for gparam in opt.param_groups:
             gparam["lr"] = lr_at(step)
-        logits = F.interpolate(net(x), scale_factor=2.0, mode="bilinear", align_corners=False)
+        logits = forward_full(x)
         loss = F.cross_entropy(logits, y, weight=wt)
+        if args.dice > 0:
+            loss = loss + args.dice * dice_loss(logits, y)
         opt.zero_grad()
         loss.backward()
         opt.step()
@@ -210,7 +247,7 @@ def main():
     cvnet.setInput(to_input(xva[:1]).numpy())
     diff = float(np.abs(cvnet.forward() - ref).max())
     print("ONNX via cv2.dnn vs torch: max |diff| %.2e" % diff, flush=True)
-    cm, infer_s = evaluate_cv_dnn(args.out, val_full, args.width, args.height)
+    cm, infer_s = evaluate_cv_dnn(args.out, val_full, args.width, args.height, args.crop_top)
     iou = ious(cm)
     miou = float(np.nanmean(iou))
     for c, v in zip(CLASS_NAMES, iou):
@@ -218,9 +255,11 @@ def main():
     print("  val mIoU (11 classes) %.3f, pixel accuracy %.3f" % (miou, np.trace(cm) / cm.sum()), flush=True)
     report = {
         "model": os.path.basename(args.out),
-        "input": {"width": args.width, "height": args.height, "channels": "RGB", "scale": 1 / 255.0,
-                  "mean": [MEAN] * 3, "std": [STD] * 3},
-        "output": {"logits_width": args.width // 2, "logits_height": args.height // 2, "classes": CLASS_NAMES},
+        "input": {"width": args.width, "height": args.height, "crop_top": args.crop_top, "channels": "RGB",
+                  "scale": 1 / 255.0, "mean": [MEAN] * 3, "std": [STD] * 3},
+        "output": {"logits_width": args.width // (1 if args.logits == "full" else 2),
+                   "logits_height": args.height // (1 if args.logits == "full" else 2), "classes": CLASS_NAMES},
+        "loss": {"cross_entropy_class_weights": True, "dice": args.dice},
         "params": int(sum(p.numel() for p in net.parameters())),
         "train_frames": int(len(xtr)), "val_frames": int(len(xva)),
         "train_dirs": args.train, "val_dirs": args.val,

@@ -3,14 +3,16 @@
 # scratch on a CPU, in one command:
 #   scripts/install-train-deps.sh     # once: python3-torch, python3-onnx, python3-opencv, python3-numpy
 #   tools/seg/train.sh [BUILD_DIR] [WORK_DIR]
-# 1. builds lanemap-seg-dataset, 2. renders the training frames (Monaco, seeds 1-20, 100 frames
+# 1. builds lanemap-seg-dataset, 2. renders the training frames (Monaco, seeds 1-40, 100 frames
 # each, varied light / sun / shadows / haze / noise / camera pitch-roll-yaw-height, more faded
 # markings) and the validation frames (the whole West Oakland network, never trained on: seeds
-# 101-106, 40 frames each), 3. trains tools/seg/model.py with /usr/bin/python3 (Debian's torch)
-# and exports ONNX, scored through OpenCV DNN at 640x360. Environment: WIDTH x HEIGHT (model input,
-# 320 x 176), STEPS (1400), MAX_MINUTES (27: the learning-rate schedule anneals within it, so on a
-# busy machine fewer steps are run), THREADS (2). A model trained at another input size needs
-# model.input_width/input_height changed in config/segmenter.yaml.
+# 101-106, 40 frames each), 3. trains tools/seg/model.py with /usr/bin/python3 (Debian's torch),
+# exports ONNX and scores it through OpenCV DNN at 640x360 (models/README.md has the figures).
+# Frames are rendered once per WORK_DIR (a second run reuses them). Environment: WIDTH x HEIGHT
+# (model input, 480 x 176), CROP_TOP (camera rows above the road the model never sees, 120),
+# DICE (weight of the soft Dice loss, 0.5), STEPS (3600), MAX_MINUTES (240: a cap; the
+# learning-rate schedule anneals within whichever comes first), THREADS (2), OUT (models/lanesegnet.onnx).
+# A model trained at another input size or crop needs config/segmenter.yaml's model keys changed.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -24,10 +26,12 @@ t0=$(date +%s)
 if [ ! -f "$work/val/index.csv" ]; then
   "$gen" --osm data/osm/west-oakland.osm --out "$work/val" --seeds 6 --first-seed 101 --frames 40 --spacing 2 --duration 300
 fi
+# Each seed's frames depend on that seed only: seeds 1-40 in one run are the frames of 1-20 and 21-40.
 if [ ! -f "$work/train/index.csv" ]; then
-  "$gen" --osm data/osm/monaco.osm.pbf --out "$work/train" --seeds 20 --first-seed 1 --frames 100 --spacing 2.5 \
+  "$gen" --osm data/osm/monaco.osm.pbf --out "$work/train" --seeds 40 --first-seed 1 --frames 100 --spacing 2.5 \
     --duration 400 --faded 0.25
 fi
 echo "train.sh: frames rendered in $(( $(date +%s) - t0 )) s into $work"
-/usr/bin/python3 "$here/train.py" --train "$work/train" --val "$work/val" --out "$root/models/lanesegnet.onnx" \
-  --width "${WIDTH:-320}" --height "${HEIGHT:-176}" --steps "${STEPS:-1400}" --max-minutes "${MAX_MINUTES:-27}" --threads "${THREADS:-2}"
+/usr/bin/python3 "$here/train.py" --train "$work/train" --val "$work/val" --out "${OUT:-$root/models/lanesegnet.onnx}" \
+  --width "${WIDTH:-480}" --height "${HEIGHT:-176}" --crop-top "${CROP_TOP:-120}" --dice "${DICE:-0.5}" \
+  --steps "${STEPS:-3600}" --max-minutes "${MAX_MINUTES:-240}" --threads "${THREADS:-2}"

@@ -54,7 +54,7 @@ TEST(SegModel, IouOnHeldOutWestOakland) {
   o.world_yaml = kRoot + "/config/sim_world.yaml";
   o.drive_yaml = kRoot + "/config/sim_drive.yaml";
   o.seed = 4242;  // training: Monaco seeds 1-20; model card validation: West Oakland seeds 101-106
-  o.max_frames = 30;
+  o.max_frames = 60;  // about 9,400 dashed-line and 26,000 right-lane pixels
   o.frame_spacing_s = 2.0;
   o.duration_s = 300.0;
   seg::ConfusionMatrix cm(11);
@@ -77,20 +77,25 @@ TEST(SegModel, IouOnHeldOutWestOakland) {
   const double miou = cm.meanIou(all);
   std::printf("  mIoU %.3f, pixel accuracy %.3f\n", miou, cm.pixelAccuracy());
 
-  // The bar is 0.75 IoU for the ego / left / right lanes and the lane markings. Asserted is
-  // what the shipped model (320x176, trained 22 min on a shared 2-core CPU, models/README.md)
-  // measured here, less a margin: ego 0.953, left 0.920, right 0.566, dashed 0.681, solid 0.712,
-  // crosswalk 0.676, curb 0.577, mIoU 0.620. The ego and left lanes meet the bar; the right lane
-  // (0.3 % of the pixels in West Oakland's mostly one-lane streets) and the markings do NOT.
-  EXPECT_GT(cm.iou(0), 0.93);   // background
-  EXPECT_GT(cm.iou(1), 0.90);   // ego lane    (bar 0.75: met)
-  EXPECT_GT(cm.iou(2), 0.85);   // left lane   (bar 0.75: met)
-  EXPECT_GT(cm.iou(3), 0.45);   // right lane  (bar 0.75: not met)
-  EXPECT_GT(cm.iou(6), 0.55);   // dashed line (bar 0.75: not met)
-  EXPECT_GT(cm.iou(7), 0.62);   // solid line  (bar 0.75: not met)
-  EXPECT_GT(cm.iou(8), 0.55);   // crosswalk
-  EXPECT_GT(cm.iou(9), 0.48);   // curb
-  EXPECT_GT(miou, 0.52);
+  // The bar is 0.75 IoU for the ego / left / right lanes and the lane markings. Measured
+  // here with the shipped model (lanesegnet-v2, 480x176 below the top 120 rows, models/README.md):
+  // ego 0.968, left 0.943, right 0.562, dashed 0.843, solid 0.856, crosswalk 0.861, curb 0.768,
+  // mIoU 0.724. On these 60 frames the ego and left lanes and both markings meet the bar and are
+  // asserted at it; the right lane does NOT (26k pixels here, 0.735 on the model card's 240
+  // validation frames, where the dashed line is 0.702 and also below the bar).
+  EXPECT_GT(cm.iou(0), 0.96);   // background
+  EXPECT_GE(cm.iou(1), 0.75);   // ego lane    (bar met)
+  EXPECT_GE(cm.iou(2), 0.75);   // left lane   (bar met)
+  EXPECT_GT(cm.iou(3), 0.50);   // right lane  (bar 0.75: NOT met)
+  EXPECT_GE(cm.iou(6), 0.75);   // dashed line (bar met here; 0.702 on the validation frames)
+  EXPECT_GE(cm.iou(7), 0.75);   // solid line  (bar met)
+  EXPECT_GT(cm.iou(1), 0.94);   // and no worse than measured, less a margin
+  EXPECT_GT(cm.iou(2), 0.91);
+  EXPECT_GT(cm.iou(6), 0.80);
+  EXPECT_GT(cm.iou(7), 0.82);
+  EXPECT_GT(cm.iou(8), 0.82);   // crosswalk
+  EXPECT_GT(cm.iou(9), 0.73);   // curb
+  EXPECT_GT(miou, 0.69);
 }
 
 TEST(SegModel, MissingModelIsAClearError) {
@@ -143,7 +148,8 @@ TEST(SegModel, ClassMapRemapsClasses) {
   int n = 0;
   for (int r = 0; r < a.rows; ++r)
     for (int x = 0; x < a.cols; ++x) {
-      const uint8_t want = a.at<uint8_t>(r, x) == 1 ? 3 : 9;
+      // Rows above crop_top are lanemap background whatever the map says: the model never saw them.
+      const uint8_t want = r < c.crop_top ? 0 : a.at<uint8_t>(r, x) == 1 ? 3 : 9;
       ASSERT_EQ(b.at<uint8_t>(r, x), want);
       n += a.at<uint8_t>(r, x) == 1;
     }

@@ -21,6 +21,7 @@
 #include "lanemap/lidar_packets_t.hpp"
 #include "lanemap/pose_t.hpp"
 #include "processes/framework/channels.h"
+#include "processes/framework/lcm_log_writer.h"
 #include "processes/framework/process.h"
 
 #include <CLI/CLI.hpp>
@@ -46,9 +47,7 @@ namespace {
 // Writes every measurement to an LCM log file as the car's drivers would have published it.
 class LogSink : public sim::SensorSink {
  public:
-  explicit LogSink(const std::string& path) : log_(path, "w") {
-    if (!log_.good()) throw std::runtime_error("cannot write LCM log '" + path + "'");
-  }
+  explicit LogSink(const std::string& path) : log_(path) {}
   void onPose(const sim::PoseMeasurement& m) override {
     pose_t msg{};
     msg.utime = m.utime;
@@ -68,7 +67,7 @@ class LogSink : public sim::SensorSink {
     msg.position_covariance[8] = 4.0 * pv;
     msg.orientation_covariance[8] = m.yaw_sigma_rad * m.yaw_sigma_rad;
     msg.status = pose_t::STATUS_SIMULATED;
-    write(channels::kPose, m.utime, msg);
+    log_.message(channels::kPose, m.utime, msg);
   }
   void onCamera(const sim::CameraMeasurement& m) override {
     image_t img;
@@ -80,7 +79,7 @@ class LogSink : public sim::SensorSink {
     img.pixelformat = image_t::PIXEL_FORMAT_JPEG;
     img.data = m.jpeg;
     img.size = static_cast<int32_t>(img.data.size());
-    write(channels::kCameraFront, m.utime, img);
+    log_.message(channels::kCameraFront, m.utime, img);
     label_image_t lab;
     lab.utime = m.utime;
     lab.seq = m.seq;
@@ -90,7 +89,7 @@ class LogSink : public sim::SensorSink {
     lab.data = m.labels_png;
     lab.size = static_cast<int32_t>(lab.data.size());
     lab.source = "sim-truth";
-    write(channels::kSemanticFrontTruth, m.utime, lab);
+    log_.message(channels::kSemanticFrontTruth, m.utime, lab);
   }
   void onLidar(const sim::LidarMeasurement& m) override {
     lidar_packets_t msg;
@@ -100,24 +99,11 @@ class LogSink : public sim::SensorSink {
     msg.packet_size = lidar::kDataPacketSize;
     msg.packet_utime = m.packet_utime;
     for (const auto& p : m.packets) msg.data.emplace_back(p.begin(), p.end());
-    write(channels::kLidarPackets, m.publish_utime, msg);
+    log_.message(channels::kLidarPackets, m.publish_utime, msg);
   }
 
  private:
-  template <typename T>
-  void write(const char* channel, int64_t timestamp, const T& msg) {
-    std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
-    msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-    lcm::LogEvent ev;
-    ev.eventnum = eventnum_++;
-    ev.timestamp = timestamp;
-    ev.channel = channel;
-    ev.datalen = static_cast<int32_t>(buf.size());
-    ev.data = buf.data();
-    if (log_.writeEvent(&ev) != 0) throw std::runtime_error("writing the LCM log failed (disk full?)");
-  }
-  lcm::LogFile log_;
-  int64_t eventnum_ = 0;
+  LcmLogWriter log_;
 };
 
 std::vector<int64_t> parseRoute(const std::string& text) {

@@ -28,6 +28,7 @@
 #include "lanemap/image_t.hpp"
 #include "lanemap/label_image_t.hpp"
 #include "processes/framework/channels.h"
+#include "processes/framework/lcm_log_writer.h"
 #include "processes/framework/process.h"
 #include "processes/segmenter/frame_queue.h"
 
@@ -187,14 +188,10 @@ class OracleApp {
 int64_t segmentLog(const std::string& in_path, const std::string& out_path, const Settings& s, seg::Segmenter& model) {
   lcm::LogFile in(in_path, "r");
   if (!in.good()) throw std::runtime_error("cannot read LCM log '" + in_path + "'");
-  lcm::LogFile out(out_path, "w");
-  if (!out.good()) throw std::runtime_error("cannot write LCM log '" + out_path + "'");
-  int64_t eventnum = 0, frames = 0, bad = 0;
-  std::vector<uint8_t> buf;
+  LcmLogWriter out(out_path);
+  int64_t frames = 0, bad = 0;
   while (const lcm::LogEvent* ev = in.readNextEvent()) {
-    lcm::LogEvent copy = *ev;
-    copy.eventnum = eventnum++;
-    if (out.writeEvent(&copy) != 0) throw std::runtime_error("writing '" + out_path + "' failed");
+    out.write(ev->channel, ev->timestamp, ev->data, static_cast<size_t>(ev->datalen));
     if (ev->channel != s.camera_channel) continue;
     image_t img;
     if (img.decode(ev->data, 0, ev->datalen) < 0) {
@@ -219,15 +216,7 @@ int64_t segmentLog(const std::string& in_path, const std::string& out_path, cons
     else lab.data = seg::encodeLabelsPng(labels);
     lab.size = static_cast<int32_t>(lab.data.size());
     lab.source = model.name();
-    buf.resize(static_cast<size_t>(lab.getEncodedSize()));
-    lab.encode(buf.data(), 0, static_cast<int>(buf.size()));
-    lcm::LogEvent le;
-    le.eventnum = eventnum++;
-    le.timestamp = ev->timestamp;
-    le.channel = s.output_channel;
-    le.datalen = static_cast<int32_t>(buf.size());
-    le.data = buf.data();
-    if (out.writeEvent(&le) != 0) throw std::runtime_error("writing '" + out_path + "' failed");
+    out.message(s.output_channel, ev->timestamp, lab);
     if (++frames % 100 == 0) std::cerr << "segmenter: " << frames << " frames\n";
   }
   std::cerr << "segmenter: " << frames << " frames segmented into " << out_path << ", " << bad << " skipped\n";

@@ -5,6 +5,7 @@
 #include "lanemap/road_event_t.hpp"
 #include "lanemap/status_t.hpp"
 #include "processes/framework/graph_report.h"
+#include "processes/framework/lcm_log_writer.h"
 #include "tests/common/sim_drive.h"
 
 #include <gtest/gtest.h>
@@ -25,21 +26,13 @@ constexpr int64_t kS = 1000000;
 
 class LogWriter {
  public:
-  explicit LogWriter(const std::string& path) : log_(path, "w") { EXPECT_TRUE(log_.good()); }
+  explicit LogWriter(const std::string& path) : log_(path) {}
   void raw(const std::string& channel, int64_t t, std::vector<uint8_t> data = {0}) {
-    lcm::LogEvent ev;
-    ev.eventnum = n_++;
-    ev.timestamp = t;
-    ev.channel = channel;
-    ev.datalen = static_cast<int32_t>(data.size());
-    ev.data = data.data();
-    EXPECT_EQ(log_.writeEvent(&ev), 0);
+    log_.write(channel, t, data.data(), data.size());
   }
   template <typename T>
   void message(const std::string& channel, int64_t t, const T& msg) {
-    std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
-    msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-    raw(channel, t, buf);
+    log_.message(channel, t, msg);
   }
   void reached(int64_t t, int64_t road) {
     road_event_t e{};
@@ -75,8 +68,7 @@ class LogWriter {
   }
 
  private:
-  lcm::LogFile log_;
-  int64_t n_ = 0;
+  LcmLogWriter log_;
 };
 
 TEST(GraphReport, FiguresFromTheRecording) {

@@ -118,7 +118,7 @@ TEST(SegmenterProcess, SegmentsFramesAndSkipsBadOnes) {
     const label_image_t& out = labels.msgs.back();
     EXPECT_EQ(out.utime, msg.utime);
     EXPECT_EQ(out.seq, msg.seq);
-    EXPECT_EQ(out.source, "lanesegnet-v2");
+    EXPECT_EQ(out.source, "lanesegnet-v3");
     EXPECT_EQ(+out.encoding, +label_image_t::ENCODING_PNG);
     const cv::Mat got = seg::decodeLabels(out.encoding, out.width, out.height, out.data);
     const cv::Mat want = local.segment(fs[i].bgr);

@@ -1,7 +1,7 @@
 // The shipped segmentation model (models/lanesegnet.onnx, run through core/seg/segmenter.h exactly
 // as lanemap-segmenter runs it) scored on held-out simulated frames: the West Oakland street
-// network (never trained on: the model saw only Monaco) with a seed used neither for training nor
-// for the model card's validation, rendered here with the simulator's core. Per-class IoU and mIoU
+// network (never trained on: the model saw only Monaco), three drives with seeds used neither for
+// training nor for the model card's validation, rendered here with the simulator's core. Per-class IoU and mIoU
 // are printed and asserted. Plus: model/config errors, frame decoding errors, the drop-oldest queue,
 // the confusion-matrix arithmetic.
 #include "core/seg/segmenter.h"
@@ -53,22 +53,27 @@ TEST(SegModel, IouOnHeldOutWestOakland) {
   o.vehicle_yaml = kRoot + "/config/vehicle.yaml";
   o.world_yaml = kRoot + "/config/sim_world.yaml";
   o.drive_yaml = kRoot + "/config/sim_drive.yaml";
-  o.seed = 4242;  // training: Monaco seeds 1-20; model card validation: West Oakland seeds 101-106
-  o.max_frames = 60;  // about 9,400 dashed-line and 26,000 right-lane pixels
+  o.max_frames = 60;
   o.frame_spacing_s = 2.0;
   o.duration_s = 300.0;
+  // Three drives, seeds used neither for training (Monaco seeds 1-40) nor for the model card's
+  // validation (West Oakland seeds 101-112). One drive had too few pixels of the rare classes for
+  // an IoU to mean much (9,400 dashed-line, 26,000 right-lane pixels in seed 4242's 60 frames).
+  const uint64_t kSeeds[] = {4242, 4243, 4244};
   seg::ConfusionMatrix cm(11);
   int frames = 0;
-  seg::renderSimFrames(o, [&](const seg::SimFrame& f) {
-    const cv::Mat labels = model.segment(f.bgr);
-    EXPECT_EQ(labels.size(), f.labels.size());
-    cm.add(f.labels, labels);
-    ++frames;
-    return true;
-  });
-  ASSERT_GE(frames, 20);
-  std::printf("lanesegnet on %d held-out West Oakland frames (seed %llu), 640x360:\n", frames,
-              static_cast<unsigned long long>(o.seed));
+  for (const uint64_t seed : kSeeds) {
+    o.seed = seed;
+    seg::renderSimFrames(o, [&](const seg::SimFrame& f) {
+      const cv::Mat labels = model.segment(f.bgr);
+      EXPECT_EQ(labels.size(), f.labels.size());
+      cm.add(f.labels, labels);
+      ++frames;
+      return true;
+    });
+  }
+  ASSERT_GE(frames, 60);
+  std::printf("lanesegnet on %d held-out West Oakland frames (seeds 4242-4244), 640x360:\n", frames);
   for (int c = 0; c < 11; ++c)
     std::printf("  %-17s IoU %.3f  (%lld truth pixels)\n", kClassNames[c], cm.iou(c),
                 static_cast<long long>(cm.truthPixels(c)));
@@ -77,25 +82,26 @@ TEST(SegModel, IouOnHeldOutWestOakland) {
   const double miou = cm.meanIou(all);
   std::printf("  mIoU %.3f, pixel accuracy %.3f\n", miou, cm.pixelAccuracy());
 
-  // The bar is 0.75 IoU for the ego / left / right lanes and the lane markings. Measured
-  // here with the shipped model (lanesegnet-v2, 480x176 below the top 120 rows, models/README.md):
-  // ego 0.968, left 0.943, right 0.562, dashed 0.843, solid 0.856, crosswalk 0.861, curb 0.768,
-  // mIoU 0.724. On these 60 frames the ego and left lanes and both markings meet the bar and are
-  // asserted at it; the right lane does NOT (26k pixels here, 0.735 on the model card's 240
-  // validation frames, where the dashed line is 0.702 and also below the bar).
-  EXPECT_GT(cm.iou(0), 0.96);   // background
-  EXPECT_GE(cm.iou(1), 0.75);   // ego lane    (bar met)
-  EXPECT_GE(cm.iou(2), 0.75);   // left lane   (bar met)
-  EXPECT_GT(cm.iou(3), 0.50);   // right lane  (bar 0.75: NOT met)
-  EXPECT_GE(cm.iou(6), 0.75);   // dashed line (bar met here; 0.702 on the validation frames)
-  EXPECT_GE(cm.iou(7), 0.75);   // solid line  (bar met)
-  EXPECT_GT(cm.iou(1), 0.94);   // and no worse than measured, less a margin
-  EXPECT_GT(cm.iou(2), 0.91);
-  EXPECT_GT(cm.iou(6), 0.80);
-  EXPECT_GT(cm.iou(7), 0.82);
-  EXPECT_GT(cm.iou(8), 0.82);   // crosswalk
-  EXPECT_GT(cm.iou(9), 0.73);   // curb
-  EXPECT_GT(miou, 0.69);
+  // The bar: 0.75 IoU for the ego / left / right lanes and the lane markings. Measured here
+  // with the shipped model (lanesegnet-v3, models/README.md): ego 0.958, left 0.950, right 0.905,
+  // dashed 0.848, solid 0.910, crosswalk 0.914, curb 0.849, mIoU 0.784. All five bar classes are
+  // asserted at the bar, and every class at what was measured less a margin, so a worse model fails:
+  // lanesegnet-v2 here has right 0.761, dashed 0.762, solid 0.874, mIoU 0.740 (right 0.562 on
+  // seed 4242 alone) and fails six of the margins.
+  EXPECT_GE(cm.iou(1), 0.75);   // ego lane
+  EXPECT_GE(cm.iou(2), 0.75);   // left lane
+  EXPECT_GE(cm.iou(3), 0.75);   // right lane
+  EXPECT_GE(cm.iou(6), 0.75);   // dashed line
+  EXPECT_GE(cm.iou(7), 0.75);   // solid line
+  EXPECT_GT(cm.iou(0), 0.97);   // background
+  EXPECT_GT(cm.iou(1), 0.94);
+  EXPECT_GT(cm.iou(2), 0.93);
+  EXPECT_GT(cm.iou(3), 0.87);
+  EXPECT_GT(cm.iou(6), 0.81);
+  EXPECT_GT(cm.iou(7), 0.89);
+  EXPECT_GT(cm.iou(8), 0.89);   // crosswalk
+  EXPECT_GT(cm.iou(9), 0.82);   // curb
+  EXPECT_GT(miou, 0.76);
 }
 
 TEST(SegModel, MissingModelIsAClearError) {

@@ -6,11 +6,11 @@
 # 1. builds lanemap-seg-dataset, 2. renders the training frames (Monaco, seeds 1-40, 100 frames
 # each, varied light / sun / shadows / haze / noise / camera pitch-roll-yaw-height, more faded
 # markings) and the validation frames (the whole West Oakland network, never trained on: seeds
-# 101-106, 40 frames each), 3. trains tools/seg/model.py with /usr/bin/python3 (Debian's torch),
+# 101-112, 40 frames each), 3. trains tools/seg/model.py with /usr/bin/python3 (Debian's torch),
 # exports ONNX and scores it through OpenCV DNN at 640x360 (models/README.md has the figures).
 # Frames are rendered once per WORK_DIR (a second run reuses them). Environment: WIDTH x HEIGHT
 # (model input, 480 x 176), CROP_TOP (camera rows above the road the model never sees, 120),
-# DICE (weight of the soft Dice loss, 0.5), STEPS (3600), MAX_MINUTES (240: a cap; the
+# DICE (weight of the soft Dice loss, 0.5), STEPS (11900), MAX_MINUTES (240: a cap; the
 # learning-rate schedule anneals within whichever comes first), THREADS (2), OUT (models/lanesegnet.onnx).
 # A model trained at another input size or crop needs config/segmenter.yaml's model keys changed.
 set -euo pipefail
@@ -24,7 +24,7 @@ cmake --build "$build" --target lanemap-seg-dataset -j"${THREADS:-2}"
 gen="$build/bin/lanemap-seg-dataset"
 t0=$(date +%s)
 if [ ! -f "$work/val/index.csv" ]; then
-  "$gen" --osm data/osm/west-oakland.osm --out "$work/val" --seeds 6 --first-seed 101 --frames 40 --spacing 2 --duration 300
+  "$gen" --osm data/osm/west-oakland.osm --out "$work/val" --seeds 12 --first-seed 101 --frames 40 --spacing 2 --duration 300
 fi
 # Each seed's frames depend on that seed only: seeds 1-40 in one run are the frames of 1-20 and 21-40.
 if [ ! -f "$work/train/index.csv" ]; then
@@ -34,4 +34,4 @@ fi
 echo "train.sh: frames rendered in $(( $(date +%s) - t0 )) s into $work"
 /usr/bin/python3 "$here/train.py" --train "$work/train" --val "$work/val" --out "${OUT:-$root/models/lanesegnet.onnx}" \
   --width "${WIDTH:-480}" --height "${HEIGHT:-176}" --crop-top "${CROP_TOP:-120}" --dice "${DICE:-0.5}" \
-  --steps "${STEPS:-3600}" --max-minutes "${MAX_MINUTES:-240}" --threads "${THREADS:-2}"
+  --steps "${STEPS:-11900}" --max-minutes "${MAX_MINUTES:-240}" --threads "${THREADS:-2}"

@@ -1,9 +1,9 @@
 // The shipped segmentation model (models/lanesegnet.onnx, run through core/seg/segmenter.h exactly
 // as lanemap-segmenter runs it) scored on held-out simulated frames: the West Oakland street
 // network (never trained on: the model saw only Monaco), three drives with seeds used neither for
-// training nor for the model card's validation, rendered here with the simulator's core. Per-class IoU and mIoU
-// are printed and asserted. Plus: model/config errors, frame decoding errors, the drop-oldest queue,
-// the confusion-matrix arithmetic.
+// training nor for the model card's validation, rendered here with the simulator's core. Per-class
+// IoU and mIoU are printed and asserted. Plus: model/config errors, frame decoding errors, the
+// drop-oldest queue, the confusion-matrix arithmetic.
 #include "core/seg/segmenter.h"
 #include "core/seg/sim_frames.h"
 #include "processes/segmenter/frame_queue.h"

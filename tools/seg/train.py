@@ -201,11 +201,12 @@ def main():
     order = np.random.permutation(n)
     pos = 0
     losses = []
-    step = 0
+    steps_done = 0
     for step in range(args.steps):
         if progress(step) >= 1.0:
             print("time cap (--max-minutes) reached at step %d" % step, flush=True)
             break
+        steps_done = step + 1
         if pos + args.batch > n:
             order = np.random.permutation(n)
             pos = 0
@@ -236,7 +237,6 @@ def main():
             iou = quick_val()
             print("  val IoU (input grid):", " ".join("%s %.3f" % (c[:10], v) for c, v in zip(CLASS_NAMES, iou)),
                   flush=True)
-    steps_done = step + 1
     train_s = time.time() - t0
 
     # Export (BatchNorm folded by constant folding) and score through OpenCV DNN at 640x360.

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 
 using namespace lanemap;
 
@@ -73,7 +74,8 @@ TEST(SegModel, IouOnHeldOutWestOakland) {
     });
   }
   ASSERT_GE(frames, 60);
-  std::printf("lanesegnet on %d held-out West Oakland frames (seeds 4242-4244), 640x360:\n", frames);
+  std::printf("lanesegnet on %d held-out West Oakland frames (seeds %llu-%llu), 640x360:\n", frames,
+              static_cast<unsigned long long>(kSeeds[0]), static_cast<unsigned long long>(std::end(kSeeds)[-1]));
   for (int c = 0; c < 11; ++c)
     std::printf("  %-17s IoU %.3f  (%lld truth pixels)\n", kClassNames[c], cm.iou(c),
                 static_cast<long long>(cm.truthPixels(c)));

@@ -5,6 +5,12 @@
 // MapTR's Chamfer AP at 0.5/1.0/1.5 m, and per-road detail. Prints a summary; --json writes it all.
 //
 //   lanemap-eval --truth groundtruth.osm --map lane_map.osm [--json report.json]
+//                [--driven scenario.json | --driven drive.lcmlog --osm roads.osm | --mapped-roads-only]
+//
+// --driven scores the roads the car drove to their end intersection (and the junction connections
+// between them): a driven road the map has no lanes on counts as missed. The route comes from
+// lanemap-sim's scenario.json, or, for a recording scored against a surveyed map, from the log's
+// POSE map-matched to the OSM by the road tracker (the same as the live graph's road tracker).
 //
 // Both files are read in one ENU frame: the truth file's writer origin when its nodes carry
 // local_x/local_y (lanemap's files do), else its first node (see eval::lanelet2Origin).
@@ -12,19 +18,60 @@
 #include "core/eval/evaluate.h"
 #include "core/io/atomic_file.h"
 #include "core/io/lanelet2.h"
+#include "core/osm/osm_data.h"
+#include "core/skeleton/skeleton.h"
+#include "core/tracking/road_tracker.h"
+#include "lanemap/pose_t.hpp"
+#include "processes/framework/channels.h"
+#include "processes/framework/pose_conversion.h"
+#include "processes/framework/process.h"
 
 #include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
 
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
+
+namespace {
+
+// The roads a recorded drive closed: its POSE channel through the road tracker on the OSM's
+// skeleton; every kReachedIntersection closes the road it ends.
+std::set<lanemap::eval::RoadKey> drivenRoadsFromLog(const std::string& log_path, const std::string& osm_path,
+                                                    const std::string& tracker_config) {
+  using namespace lanemap;
+  if (osm_path.empty()) throw std::runtime_error("--driven with an LCM log needs --osm (the road network it drove)");
+  const auto sk = skeleton::Skeleton::build(osm::readOsm(osm_path));
+  tracking::RoadTracker tracker(sk, tracking::RoadTrackerConfig::fromYaml(loadYamlFile(tracker_config)["tracker"]));
+  lcm::LogFile log(log_path, "r");
+  if (!log.good()) throw std::runtime_error("cannot read LCM log: " + log_path);
+  std::set<eval::RoadKey> out;
+  size_t poses = 0;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    if (ev->channel != channels::kPose) continue;
+    pose_t m;
+    if (m.decode(ev->data, 0, static_cast<int>(ev->datalen)) < 0) continue;
+    ++poses;
+    for (const auto& e : tracker.update(toPoseInput(toEnuPose(m, sk.frame())))) {
+      if (e.type == tracking::RoadEventType::kReachedIntersection) out.insert({e.from_node, e.to_node});
+    }
+  }
+  if (poses == 0) throw std::runtime_error(log_path + ": no " + std::string(channels::kPose) + " message");
+  return out;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Scores a built Lanelet2 lane map against a ground-truth Lanelet2 map"};
   std::string truth_path, map_path, json_path, subtypes_arg = "road,highway,play_street,bus_lane,emergency_lane,exit,";
   lanemap::eval::EvalOptions options;
+  std::string driven_path, osm_path;
+  std::string tracker_config = std::string(LANEMAP_SOURCE_DIR) + "/config/road_tracker.yaml";
   bool no_road_tags = false, quiet = false, mapped_only = false;
   app.add_option("--truth", truth_path, "ground-truth Lanelet2 map (.osm)")->required();
   app.add_option("--map", map_path, "built Lanelet2 map (.osm)")->required();
@@ -39,6 +86,14 @@ int main(int argc, char** argv) {
   app.add_flag("--mapped-roads-only", mapped_only,
                "score against the truth of the atomic roads the map has (and the intersection lanes between "
                "them), not the whole city: what one drive could map (needs lanemap:from_node/to_node tags)");
+  auto* driven_opt = app.add_option(
+      "--driven", driven_path,
+      "score against the truth of the atomic roads the car drove to their end (and the intersection lanes "
+      "between them); a driven road with no lanes counts as missed. ROUTE: lanemap-sim's scenario.json, or "
+      "an LCM log whose POSE is map-matched to --osm by the road tracker");
+  app.add_option("--osm", osm_path, "road-level OSM file the drive used (with --driven LOG)");
+  app.add_option("--tracker-config", tracker_config, "road tracker options (with --driven LOG)")->capture_default_str();
+  driven_opt->excludes(app.get_option("--mapped-roads-only"));
   app.add_flag("-q,--quiet", quiet, "no summary on stdout");
   CLI11_PARSE(app, argc, argv);
   options.match_by_road_tags = !no_road_tags;
@@ -52,10 +107,19 @@ int main(int argc, char** argv) {
     const lanemap::geo::LatLonAlt origin = lanemap::eval::lanelet2Origin(truth_path);
     auto truth = lanemap::io::readLanelet2(truth_path, origin.lat, origin.lon, ro);
     const auto built = lanemap::io::readLanelet2(map_path, origin.lat, origin.lon, ro);
+    size_t driven_roads = 0;
     if (mapped_only) truth = lanemap::eval::restrictToMappedRoads(truth, built);
+    if (!driven_path.empty()) {
+      const bool json = std::filesystem::path(driven_path).extension() == ".json";
+      const auto roads = json ? lanemap::eval::drivenRoadsFromScenario(driven_path)
+                              : drivenRoadsFromLog(driven_path, osm_path, tracker_config);
+      driven_roads = roads.size();
+      truth = lanemap::eval::restrictToRoads(truth, roads);
+    }
     const auto report = lanemap::eval::evaluate(truth, built, options);
     if (!quiet) {
-      std::printf("truth: %s (%zu lanelets)\nmap:   %s (%zu lanelets)\n", truth_path.c_str(), truth.lanelets.size(),
+      std::printf("truth: %s (%zu lanelets%s)\nmap:   %s (%zu lanelets)\n", truth_path.c_str(), truth.lanelets.size(),
+                  driven_path.empty() ? "" : (", " + std::to_string(driven_roads) + " driven roads").c_str(),
                   map_path.c_str(), built.lanelets.size());
       std::cout << lanemap::eval::summary(report) << std::flush;
     }
@@ -64,6 +128,8 @@ int main(int argc, char** argv) {
       j["truth"] = truth_path;
       j["map"] = map_path;
       j["origin"] = {{"lat", origin.lat}, {"lon", origin.lon}};
+      j["scored_area"] = !driven_path.empty() ? "driven" : mapped_only ? "mapped_roads" : "whole_truth";
+      if (!driven_path.empty()) j["driven_roads"] = driven_roads;
       lanemap::io::writeFileAtomically(json_path, j.dump(2) + "\n");
       if (!quiet) std::printf("wrote %s\n", json_path.c_str());
     }

@@ -1,18 +1,28 @@
 #include "core/eval/area.h"
 
-#include <set>
-#include <utility>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <stdexcept>
 
 namespace lanemap::eval {
 
-map::LaneMap restrictToMappedRoads(const map::LaneMap& truth, const map::LaneMap& built) {
-  std::set<std::pair<int64_t, int64_t>> mapped;  // (from_node, to_node) of the built road lanelets
+std::set<RoadKey> mappedRoads(const map::LaneMap& built) {
+  std::set<RoadKey> mapped;
   for (const auto& l : built.lanelets) {
     if (l.kind == map::LaneletKind::kRoad && l.from_node >= 0) mapped.insert({l.from_node, l.to_node});
   }
+  return mapped;
+}
+
+map::LaneMap restrictToMappedRoads(const map::LaneMap& truth, const map::LaneMap& built) {
+  return restrictToRoads(truth, mappedRoads(built));
+}
+
+map::LaneMap restrictToRoads(const map::LaneMap& truth, const std::set<RoadKey>& roads) {
   std::set<int64_t> keep;
   for (const auto& l : truth.lanelets) {
-    if (l.kind == map::LaneletKind::kRoad && mapped.count({l.from_node, l.to_node})) keep.insert(l.id);
+    if (l.kind == map::LaneletKind::kRoad && roads.count({l.from_node, l.to_node})) keep.insert(l.id);
   }
   std::set<int64_t> connectors;
   for (const auto& l : truth.lanelets) {
@@ -46,6 +56,27 @@ map::LaneMap restrictToMappedRoads(const map::LaneMap& truth, const map::LaneMap
   }
   for (const auto& ls : truth.lines) {
     if (lines.count(ls.id)) out.lines.push_back(ls);
+  }
+  return out;
+}
+
+std::set<RoadKey> drivenRoadsFromScenario(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(path + ": not JSON (" + e.what() + ")");
+  }
+  if (!j.is_object() || !j.contains("route") || !j["route"].is_array()) {
+    throw std::runtime_error(path + ": no \"route\" array (expected lanemap-sim's scenario.json)");
+  }
+  std::set<RoadKey> out;
+  for (const auto& r : j["route"]) {
+    if (!r.contains("from") || !r.contains("to")) throw std::runtime_error(path + ": a route entry without from/to");
+    if (r.contains("left_utime") && r["left_utime"].is_null()) continue;  // the drive ended on it
+    out.insert({r["from"].get<int64_t>(), r["to"].get<int64_t>()});
   }
   return out;
 }

@@ -91,6 +91,73 @@ struct Raster {
   }
 };
 
+// Lanes the segmentation does not name. It labels the ego lane and two lanes either side; a lane
+// beyond them (the fourth and fifth lanes of an avenue, seen from the first) is observed asphalt
+// of no lane class, i.e. blocked, and would end the exploration there. Per bin of
+// divider_bin_m along s: the painted lines of the bin (columns with dashes in at least 10 % of its
+// rows, or a solid line or curb in 30 %); between two neighbouring lines lane_width_min_m to
+// lane_width_max_m apart, at least one of them dashed (a dashed line only ever separates two lanes
+// of one direction), a strip with no drivable cell in 90 % of the bin's rows of every column
+// (blocked, or the blurred edge of a line) and blocked in 80 % of its cells is a lane: its blocked
+// cells become drivable. A parked car fills a few rows of a bin, not 90 %.
+void markUnnamedLanes(Raster& r, const ExplorerOptions& o) {
+  const int bin_rows = std::max(1, static_cast<int>(std::round(o.divider_bin_m / r.res)));
+  const int min_cols = static_cast<int>(std::round(o.lane_width_min_m / r.res));
+  const int max_cols = static_cast<int>(std::round(o.lane_width_max_m / r.res));
+  std::vector<float> dashed(r.nd), edge(r.nd), blocked(r.nd), closed(r.nd);
+  for (int i0 = 0; i0 < r.ns; i0 += bin_rows) {
+    const int i1 = std::min(r.ns, i0 + bin_rows);
+    const float n = static_cast<float>(i1 - i0);
+    for (int j = 0; j < r.nd; ++j) {
+      int da = 0, ed = 0, bl = 0, cl = 0;
+      for (int i = i0; i < i1; ++i) {
+        const uint8_t c = r.at(i, j);
+        da += c == kDashed;
+        ed += c == kSolid || c == kCurb;
+        bl += c == kBlocked;
+        cl += c >= kBlocked && c != kOutside;
+      }
+      dashed[j] = da / n;
+      edge[j] = ed / n;
+      blocked[j] = bl / n;
+      closed[j] = cl / n;
+    }
+    // Painted lines of the bin, left to right in d: runs of marked columns.
+    struct Paint { int j0, j1; bool dashed; };
+    std::vector<Paint> lines;
+    for (int j = 0; j < r.nd; ++j) {
+      const bool d = dashed[j] >= 0.1f, e = edge[j] >= 0.3f;
+      if (!d && !e) continue;
+      if (!lines.empty() && lines.back().j1 >= j - 1) {
+        lines.back().j1 = j;
+        lines.back().dashed = lines.back().dashed || d;
+      } else {
+        lines.push_back({j, j, d});
+      }
+    }
+    for (size_t k = 0; k + 1 < lines.size(); ++k) {
+      const Paint& a = lines[k];
+      const Paint& b = lines[k + 1];
+      if (!a.dashed && !b.dashed) continue;
+      const int gap = b.j0 - a.j1;
+      if (gap < min_cols || gap > max_cols) continue;
+      bool lane = true;
+      float blocked_sum = 0.0f;
+      for (int j = a.j1 + 1; j < b.j0 && lane; ++j) {
+        lane = closed[j] >= 0.9f;
+        blocked_sum += blocked[j];
+      }
+      if (!lane || blocked_sum < 0.8f * (b.j0 - a.j1 - 1)) continue;
+      for (int i = i0; i < i1; ++i) {
+        for (int j = a.j1 + 1; j < b.j0; ++j) {
+          uint8_t& c = r.code[static_cast<size_t>(i) * r.nd + j];
+          if (c == kBlocked) c = kDrivable;
+        }
+      }
+    }
+  }
+}
+
 Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const RoadGeometry& road, const ExplorerOptions& o) {
   Raster r;
   r.res = grid.resolution();
@@ -123,6 +190,7 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
       r.code[static_cast<size_t>(i) * r.nd + j] = c;
     }
   }
+  if (o.unnamed_lanes) markUnnamedLanes(r, o);
   // Direction divider of a two-way road: per divider_bin_m of s, the solid line nearest d = 0
   // within divider_search_m; bins without one are interpolated, a road without any uses d = 0.
   if (road.two_way) {
@@ -276,26 +344,44 @@ RoadGeometry RoadGeometry::fromSkeleton(const skeleton::AtomicRoad& road) {
   return g;
 }
 
+RoadGeometry explorationStretch(const RoadGeometry& road, double length, const ExplorerOptions& o) {
+  RoadGeometry r = road;
+  r.s_end = std::min(road.s_end, length);
+  r.s_begin = std::clamp(road.s_begin, 0.0, r.s_end);
+  if (r.s_end - r.s_begin < o.short_road_min_m) {
+    // A link between close junctions: the ROIs leave (almost) nothing of it. Its lanes still exist
+    // (the car drove one), so explore the middle short_road_min_m of the polyline, into the ROIs.
+    const double want = std::min(o.short_road_min_m, length);
+    const double mid = 0.5 * (r.s_begin + r.s_end);
+    r.s_begin = std::clamp(mid - 0.5 * want, 0.0, length - want);
+    r.s_end = r.s_begin + want;
+  }
+  return r;
+}
+
 int ExplorationResult::laneCountAt(double s) const {
   int n = 0;
   for (const auto& l : lanes) n += s >= l.s_begin && s <= l.s_end;
   return n;
 }
 
-ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road, const ExplorerOptions& o,
+ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road_in, const ExplorerOptions& o,
                               const std::optional<EgoPose>& ego, int history_stride) {
   o.validate();
-  if (road.polyline.size() < 2) throw LanesError("road " + std::to_string(road.road_id) + " has no polyline");
+  if (road_in.polyline.size() < 2) throw LanesError("road " + std::to_string(road_in.road_id) + " has no polyline");
   ExplorationResult res;
-  res.road_id = road.road_id;
-  res.from_node = road.from_node;
-  res.to_node = road.to_node;
-  auto frame = std::make_shared<FrenetFrame>(road.polyline, o.frame_spacing_m, o.frame_smoothing_m);
+  res.road_id = road_in.road_id;
+  res.from_node = road_in.from_node;
+  res.to_node = road_in.to_node;
+  auto frame = std::make_shared<FrenetFrame>(road_in.polyline, o.frame_spacing_m, o.frame_smoothing_m);
   res.frame = frame;
-  const double s_stop = std::min(road.s_end, frame->length());
-  double s_start = std::clamp(road.s_begin, 0.0, frame->length());
+  const RoadGeometry road = explorationStretch(road_in, frame->length(), o);
+  const double s_stop = road.s_end;
+  double s_start = road.s_begin;
   if (ego) s_start = std::clamp(frame->toFrenet(ego->position).x(), s_start, s_stop);
   if (!(s_stop - s_start > 1.0)) throw LanesError("road " + std::to_string(road.road_id) + " has no length to explore");
+  // A lane must cover most of a short road's stretch, else min_lane_length_m.
+  const double min_lane_length = std::min(o.min_lane_length_m, 0.8 * (road.s_end - road.s_begin));
 
   auto t0 = Clock::now();
   const Raster R = buildRaster(grid, *frame, road, o);
@@ -334,14 +420,20 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
     return out;
   };
 
-  // Start strip: across the free part of the road at the start (observed drivable preferred).
+  // Start strip: across the road's observed drivable ground at the first s within 30 m that has
+  // any (a road first seen some way in, after a turn: its lanes start there and are carried back
+  // to the road's start below, as lanes that began with the strip); when there is none, across the
+  // free (unobserved) part at the start.
   {
     double s = s_start;
     std::vector<std::pair<double, double>> iv;
     for (; s < std::min(s_stop, s_start + 30.0); s += 1.0) {
       iv = freeIntervals(s, true);
-      if (iv.empty()) iv = freeIntervals(s, false);
       if (!iv.empty()) break;
+    }
+    if (iv.empty()) {
+      s = s_start;
+      iv = freeIntervals(s, false);
     }
     if (ego && !iv.empty()) {
       // The strip is perpendicular to the driving direction at the ego pose: that is our s_start.
@@ -571,7 +663,7 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
     const double s_beg = tr.initial ? std::max(road.s_begin, 0.0) : tr.first_s;
     double support = 0.0;
     for (double c : tr.cnt) support += c > 0 ? o.bin_m : 0.0;
-    if (s_end - s_beg < o.min_lane_length_m || support < 0.5 * o.min_lane_length_m) continue;
+    if (s_end - s_beg < min_lane_length || support < 0.5 * min_lane_length) continue;
     BinnedSamples bs;
     for (int b = 0; b < nbins; ++b) {
       if (tr.cnt[b] <= 0) continue;

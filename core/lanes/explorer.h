@@ -94,8 +94,13 @@ struct ExplorationResult {
   std::vector<Eigen::Vector2d> history;
 };
 
+// The stretch [s_begin, s_end] of a road that exploreRoad explores (the road's own, between its
+// two ROIs, clamped to the polyline's length; on a road shorter there than
+// options.short_road_min_m, that much around the stretch's middle).
+RoadGeometry explorationStretch(const RoadGeometry& road, double length, const ExplorerOptions& options);
+
 // Runs Algorithm 1 on a road's BEV grid. Deterministic for options.seed. Throws LanesError on a
-// degenerate road (no length between s_begin and s_end).
+// degenerate road (a polyline under 1 m long).
 ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road, const ExplorerOptions& options,
                               const std::optional<EgoPose>& ego = std::nullopt, int history_stride = 0);
 

@@ -47,6 +47,9 @@ ExplorerOptions ExplorerOptions::fromYaml(const YAML::Node& n) {
   read(n, "divider_search_m", o.divider_search_m, k);
   read(n, "divider_bin_m", o.divider_bin_m, k);
   read(n, "carriageway_wall_m", o.carriageway_wall_m, k);
+  read(n, "unnamed_lanes", o.unnamed_lanes, k);
+  read(n, "lane_width_min_m", o.lane_width_min_m, k);
+  read(n, "lane_width_max_m", o.lane_width_max_m, k);
   read(n, "birth_every_m", o.birth_every_m, k);
   read(n, "birth_min_free_m", o.birth_min_free_m, k);
   read(n, "birth_min_evidence", o.birth_min_evidence, k);
@@ -57,6 +60,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const YAML::Node& n) {
   read(n, "lane_gap_max_m", o.lane_gap_max_m, k);
   read(n, "same_lane_m", o.same_lane_m, k);
   read(n, "min_lane_length_m", o.min_lane_length_m, k);
+  read(n, "short_road_min_m", o.short_road_min_m, k);
   read(n, "split_neighbour_m", o.split_neighbour_m, k);
   read(n, "bin_m", o.bin_m, k);
   read(n, "break_spacing_m", o.break_spacing_m, k);
@@ -91,10 +95,12 @@ void ExplorerOptions::validate() const {
   need(frame_smoothing_m >= 0, "frame_smoothing_m >= 0");
   need(divider_search_m >= 0 && divider_bin_m > 0, "divider_search_m, divider_bin_m");
   need(carriageway_wall_m > 0, "carriageway_wall_m > 0");
+  need(lane_width_min_m > 0 && lane_width_max_m >= lane_width_min_m, "0 < lane_width_min_m <= lane_width_max_m");
   need(birth_every_m > 0 && birth_min_free_m >= 0 && birth_particles >= 1, "births");
   need(birth_min_evidence >= 0 && birth_min_evidence <= 1, "birth_min_evidence in [0, 1]");
   need(dbscan_eps_m > 0 && dbscan_min_points >= 1, "dbscan");
   need(track_tolerance_m >= 0 && lane_gap_max_m >= 0 && same_lane_m >= 0 && min_lane_length_m >= 0, "tracking");
+  need(short_road_min_m >= 1.0 && short_road_min_m <= 100.0, "short_road_min_m in [1, 100]");
   need(bin_m > 0 && break_spacing_m >= bin_m && break_penalty_m2 >= 0, "regression");
   need(waypoint_spacing_m > 0, "waypoint_spacing_m > 0");
   need(probe_max_m > 0 && default_half_width_m > 0, "probing");

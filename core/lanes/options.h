@@ -52,13 +52,22 @@ struct ExplorerOptions {
   double birth_min_evidence = 0.6;       // fraction of the footprint cells observed drivable
   int birth_particles = 40;
 
+  bool unnamed_lanes = true;             // lanes beyond the segmentation's +-2 lane classes: a
+                                         //   blocked strip between painted lines (one dashed) is a lane
+  double lane_width_min_m = 2.4;         // ... when the lines are this far apart ...
+  double lane_width_max_m = 4.6;         // ... at most
+
   // --- clustering and lanes ---
   double dbscan_eps_m = 1.0;             // the paper's value
   int dbscan_min_points = 4;
   double track_tolerance_m = 0.6;        // a cluster continues a lane whose d is within its range +- this
   double lane_gap_max_m = 20.0;          // a lane with no particles longer than this has ended
   double same_lane_m = 1.2;              // two lanes closer than this are one
-  double min_lane_length_m = 10.0;       // shorter lanes are dropped
+  double min_lane_length_m = 10.0;       // shorter lanes are dropped (on a road shorter than this
+                                         //   between its ROIs: shorter than 0.8 of that stretch)
+  double short_road_min_m = 6.0;         // a road whose stretch between its two ROIs is shorter (a
+                                         //   link between close junctions) is explored over this
+                                         //   much around the stretch's middle, into the ROIs
   double split_neighbour_m = 4.5;        // a lane born/ending this close to another splits/merges
 
   // --- centre line regression (Eq. 6) and way-points ---

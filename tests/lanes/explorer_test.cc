@@ -282,12 +282,100 @@ TEST(Explorer, ThrowsOnADegenerateRoad) {
   const Scenario sc = straightLanes({3.5}, 50.0);
   const bev::BevGrid grid = paint(sc.layout);
   RoadGeometry road;
-  road.polyline = sc.layout.ref.polyline();
-  road.s_begin = 30.0;
-  road.s_end = 30.5;
+  road.polyline = {sc.layout.ref.at(0.0, 0.0), sc.layout.ref.at(0.8, 0.0)};  // 0.8 m of road
+  road.s_begin = 0.0;
+  road.s_end = 0.8;
   EXPECT_THROW(exploreRoad(grid, road, {}), LanesError);
   road.polyline.resize(1);
   EXPECT_THROW(exploreRoad(grid, road, {}), LanesError);
+}
+
+// Issue 16: a 12 m link road between two close junctions. The ROIs of both ends leave 1 m of it
+// between them (Monaco: a fifth of the atomic roads are under 30 m); its two lanes must still be
+// found, over the middle short_road_min_m of the road.
+TEST(Explorer, TwelveMetreLinkRoad) {
+  const Scenario sc = straightLanes({3.5, 3.4}, 12.0);
+  const bev::BevGrid grid = paint(sc.layout);
+  RoadGeometry road;
+  road.road_id = 9;
+  road.polyline = sc.layout.ref.polyline(2.0);
+  road.s_begin = 5.5;  // I_i's ROI ends here ...
+  road.s_end = 6.5;    // ... and I_j's begins
+  const ExplorerOptions opt;
+  const RoadGeometry stretch = explorationStretch(road, 12.0, opt);
+  EXPECT_NEAR(stretch.s_begin, 3.0, 1e-9);
+  EXPECT_NEAR(stretch.s_end, 9.0, 1e-9);
+  const ExplorationResult res = exploreRoad(grid, road, opt);
+  ASSERT_EQ(res.lanes.size(), 2u);
+  for (const Lane& l : res.lanes) {
+    EXPECT_GE(l.s_end - l.s_begin, 0.8 * opt.short_road_min_m - 1e-9) << "lane " << l.id;
+    const double truth_d = l.index_from_left == 0 ? sc.truth[0].d(0) : sc.truth[1].d(0);
+    for (const auto& p : l.waypoints) EXPECT_NEAR(sc.layout.ref.toSD(p).y(), truth_d, 0.25) << "lane " << l.id;
+  }
+  EXPECT_EQ(toLaneMap(res).lanelets.size(), 2u);
+}
+
+// A road 9 m long between its ROIs: shorter than min_lane_length_m (10 m), so its lanes were
+// dropped; a lane covering most of the stretch is kept.
+TEST(Explorer, NineMetreStretchKeepsItsLanes) {
+  const Scenario sc = straightLanes({3.5}, 30.0);
+  const bev::BevGrid grid = paint(sc.layout);
+  RoadGeometry road;
+  road.polyline = sc.layout.ref.polyline(2.0);
+  road.s_begin = 10.0;
+  road.s_end = 19.0;
+  const ExplorationResult res = exploreRoad(grid, road, {});
+  ASSERT_EQ(res.lanes.size(), 1u);
+  EXPECT_NEAR(res.lanes[0].centre.d(14.5), sc.truth[0].d(0), 0.15);
+}
+
+// Five lanes in one direction (an avenue): every lane found, left to right.
+TEST(Explorer, FiveLaneRoad) {
+  const Scenario sc = straightLanes({3.5, 3.3, 3.6, 3.2, 3.4}, 200.0);
+  const Report rep = run(sc);
+  expectLanes(rep, sc);
+  for (const Lane& l : rep.result.lanes) EXPECT_EQ(l.index_from_left, rep.match[l.id]);
+}
+
+// Five lanes seen from the left-most: the segmentation names the ego lane and two to its right;
+// the fourth and fifth lanes are observed asphalt of no lane class (blocked in the BEV), between
+// painted lines. They are lanes all the same; and a blocked strip between a dashed line and a
+// curb too wide for a lane (a hard shoulder) is not made one.
+TEST(Explorer, FiveLaneRoadBeyondTheLaneClasses) {
+  Scenario sc = straightLanes({3.5, 3.3, 3.6, 3.2, 3.4}, 200.0);
+  // The drivable area of the three named lanes only: from the left edge (+0.5 m) to the second
+  // dashed line from the right.
+  const double left = 3.5 + 3.3 + 3.6 + 3.2 + 3.4;  // total width
+  const double e3 = left / 2 - (3.5 + 3.3 + 3.6);   // d of the line between lanes 3 and 4
+  sc.layout.areas[0].dlo = constant(e3);
+  const Report rep = run(sc);
+  expectLanes(rep, sc);
+  ExplorerOptions off;
+  off.unnamed_lanes = false;
+  EXPECT_EQ(run(sc, 1, off).result.lanes.size(), 3u) << "without the rule only the named lanes are found";
+}
+
+TEST(Explorer, NoLaneMadeOfAWideShoulder) {
+  Scenario sc = straightLanes({3.5, 3.4}, 200.0);
+  // The right edge line is dashed, and 6 m of blocked ground lie between it and the curb.
+  for (auto& ln : sc.layout.lines) {
+    if (ln.kind == Line::kSolid && ln.d(0) < -3.0) ln.kind = Line::kDashed;
+    if (ln.kind == Line::kCurb && ln.d(0) < -3.0) ln.d = constant(-3.45 - 6.0);
+  }
+  sc.layout.areas[0].dlo = constant(-3.45);
+  const Report rep = run(sc);
+  expectLanes(rep, sc);
+}
+
+// A road first seen 20 m in (the car turned into it: the camera saw nothing of its first 20 m).
+// Its lanes still start at the road's start, where the junction connects them, continued from
+// the first evidence; and nothing spurious is made of the unseen stretch.
+TEST(Explorer, RoadFirstSeenTwentyMetresIn) {
+  Scenario sc = straightLanes({3.5, 3.4}, 150.0);
+  sc.layout.observed_s0 = 23.0;  // s_begin 3 + 20 m
+  const Report rep = run(sc);
+  expectLanes(rep, sc);
+  for (const Lane& l : rep.result.lanes) EXPECT_NEAR(l.s_begin, 3.0, 0.5) << "lane " << l.id;
 }
 
 }  // namespace

@@ -77,6 +77,7 @@ struct Layout {
   std::vector<Area> areas;
   std::vector<Box> boxes;
   double observed_half_width = 14.0;
+  double observed_s0 = -1e9;  // nothing observed before this s (a road first seen this far in)
   uint64_t seed = 3;
 };
 
@@ -98,7 +99,7 @@ inline bev::BevGrid paint(const Layout& L) {
       const bev::BevGrid::Cell cell(i, j);
       const Eigen::Vector2d sd = L.ref.toSD(g.cellCentre(cell));
       const double s = sd.x(), d = sd.y();
-      if (s < 0 || s > L.ref.length || std::abs(d) > L.observed_half_width) continue;
+      if (s < 0 || s > L.ref.length || s < L.observed_s0 || std::abs(d) > L.observed_half_width) continue;
       const int obs = obsN(rng);
       g.add(cell, bev::Layer::kObserved, obs);
       bool blocked = false;

@@ -4,8 +4,17 @@
 // this thread (the live bev_builder builds them in a worker and may use an older one).
 //
 //   lanemap-offline --log drive.lcmlog --osm roads.osm --out DIR
-//       [--semantic-channel SEMANTIC_FRONT|SEMANTIC_FRONT_TRUTH] [--no-lidar]
-// writes DIR/map.osm (Lanelet2), DIR/map.geojson, DIR/map.png and DIR/bev/road_<id>.bev.
+//       [--oracle | --semantic-channel CHANNEL] [--model FILE.onnx] [--no-lidar]
+// writes DIR/map.osm (Lanelet2), DIR/map.geojson, DIR/map.png, DIR/summary.json and
+// DIR/bev/road_<id>.bev.
+//
+// Labels: by default every CAMERA_FRONT frame is segmented with the configured model
+// (config/segmenter.yaml, as lanemap-segmenter does), so a real recording needs nothing else;
+// --oracle takes the simulator's SEMANTIC_FRONT_TRUTH instead, --semantic-channel any label
+// channel already in the log (SEMANTIC_FRONT of a log lanemap-segmenter --log-out wrote).
+//
+// One road's trouble never costs the map: a road whose exploration fails is named on stderr and in
+// summary.json (roads_failed, with the reason), and every other road is still mapped.
 #include "core/bev/bev_builder.h"
 #include "core/bev/bev_store.h"
 #include "core/camera/camera_model.h"
@@ -16,8 +25,11 @@
 #include "core/lanes/options.h"
 #include "core/mapping/map_assembler.h"
 #include "core/osm/osm_data.h"
+#include "core/seg/segmenter.h"
 #include "core/skeleton/skeleton.h"
 #include "core/tracking/road_tracker.h"
+#include "core/io/atomic_file.h"
+#include "lanemap/image_t.hpp"
 #include "lanemap/label_image_t.hpp"
 #include "lanemap/lidar_packets_t.hpp"
 #include "lanemap/pose_t.hpp"
@@ -34,6 +46,8 @@
 #include <filesystem>
 #include <iostream>
 #include <limits>
+#include <memory>
+#include <nlohmann/json.hpp>
 
 namespace fs = std::filesystem;
 using namespace lanemap;
@@ -41,7 +55,11 @@ using namespace lanemap;
 namespace {
 
 struct Options {
-  std::string log, osm, out, semantic_channel = channels::kSemanticFrontTruth;
+  std::string log, osm, out;
+  std::string semantic_channel;  // empty: segment CAMERA_FRONT with the model
+  bool oracle = false;
+  std::string segmenter_config = std::string(LANEMAP_SOURCE_DIR) + "/config/segmenter.yaml";
+  std::string model;             // overrides the segmenter config's model.path
   std::string vehicle = std::string(LANEMAP_SOURCE_DIR) + "/config/vehicle.yaml";
   std::string bev_config = std::string(LANEMAP_SOURCE_DIR) + "/config/bev_builder.yaml";
   std::string lanes_config = std::string(LANEMAP_SOURCE_DIR) + "/config/lane_mapper.yaml";
@@ -57,8 +75,9 @@ bool decode(const lcm::LogEvent& ev, T& msg) {
 
 class OfflineMapper {
  public:
-  OfflineMapper(const Options& o, const skeleton::Skeleton& sk, const std::vector<osm::Restriction>& restrictions)
-      : o_(o), sk_(sk), tracker_(sk, tracking::RoadTrackerConfig::fromYaml(loadYamlFile(o.tracker_config)["tracker"])),
+  OfflineMapper(const Options& o, const skeleton::Skeleton& sk, const std::vector<osm::Restriction>& restrictions,
+                std::unique_ptr<seg::Segmenter> model)
+      : o_(o), model_(std::move(model)), sk_(sk), tracker_(sk, tracking::RoadTrackerConfig::fromYaml(loadYamlFile(o.tracker_config)["tracker"])),
         builder_(sk, camera::CameraModel::fromYamlFile(o.vehicle), bevOptions(o)),
         explorer_(lanes::ExplorerOptions::fromYaml(loadYamlFile(o.lanes_config)["explorer"])),
         assembler_(sk, intersections::IntersectionOptions::fromYaml(loadYamlFile(o.intersections_config)), restrictions) {}
@@ -67,9 +86,22 @@ class OfflineMapper {
     if (ev.channel == channels::kPose) {
       pose_t m;
       if (decode(ev, m)) onPose(m);
-    } else if (ev.channel == o_.semantic_channel) {
+    } else if (!model_ && ev.channel == o_.semantic_channel) {
       label_image_t m;
       if (decode(ev, m)) builder_.addEncodedFrame(m.utime, static_cast<bev::LabelEncoding>(m.encoding), m.data, m.width, m.height);
+    } else if (model_ && ev.channel == channels::kCameraFront) {
+      image_t m;
+      if (!decode(ev, m)) {
+        ++frames_failed_;
+        return;
+      }
+      try {
+        builder_.addFrame(m.utime, model_->segment(seg::decodeFrame(m.pixelformat, m.width, m.height, m.row_stride,
+                                                                     m.data.data(), m.data.size())));
+        ++frames_segmented_;
+      } catch (const seg::FrameError& e) {
+        if (frames_failed_++ < 10) std::fprintf(stderr, "lanemap-offline: camera frame %lld skipped: %s\n", static_cast<long long>(m.seq), e.what());
+      }
     } else if (ev.channel == channels::kLidarPackets && !o_.no_lidar) {
       lidar_packets_t m;
       if (decode(ev, m)) builder_.addSweep(bev::SweepData{m.utime, m.packet_utime, m.data});
@@ -84,6 +116,11 @@ class OfflineMapper {
 
   const mapping::MapAssembler& assembler() const { return assembler_; }
   int roadsMapped() const { return roads_mapped_; }
+  int64_t framesSegmented() const { return frames_segmented_; }
+  int64_t framesFailed() const { return frames_failed_; }
+  // Per road explored: lanes found, or why it failed.
+  const nlohmann::json& roadLog() const { return road_log_; }
+  int roadsFailed() const { return roads_failed_; }
   const bev::BevBuilder& builder() const { return builder_; }
 
  private:
@@ -119,23 +156,44 @@ class OfflineMapper {
       it->second.save((fs::path(o_.out) / "bev" / ("road_" + std::to_string(road.road_id) + ".bev")).string());
       const auto* r = sk_.road(road.road_id);
       if (!r) continue;
-      const auto res = lanes::exploreRoad(it->second, lanes::RoadGeometry::fromSkeleton(*r), explorer_);
-      const auto& origin = sk_.frame().origin();
-      assembler_.setRoad(road.road_id, lanes::toLaneMap(res, origin.lat, origin.lon, origin.alt));
-      ++roads_mapped_;
-      if (!o_.quiet) std::fprintf(stderr, "\rlanemap-offline: road %lld: %zu lanes%20s\n", static_cast<long long>(road.road_id), res.lanes.size(), "");
+      nlohmann::json entry = {{"road_id", road.road_id}, {"from", r->from}, {"to", r->to}};
+      try {
+        const auto res = lanes::exploreRoad(it->second, lanes::RoadGeometry::fromSkeleton(*r), explorer_);
+        const auto& origin = sk_.frame().origin();
+        assembler_.setRoad(road.road_id, lanes::toLaneMap(res, origin.lat, origin.lon, origin.alt));
+        ++roads_mapped_;
+        entry["lanes"] = res.lanes.size();
+        if (!o_.quiet) std::fprintf(stderr, "\rlanemap-offline: road %lld: %zu lanes%20s\n", static_cast<long long>(road.road_id), res.lanes.size(), "");
+      } catch (const std::exception& e) {
+        // The road keeps its BEV (bev/road_<id>.bev) and its previous lanes, if any.
+        ++roads_failed_;
+        entry["error"] = e.what();
+        std::fprintf(stderr, "\rlanemap-offline: road %lld failed, the rest is mapped: %s\n", static_cast<long long>(road.road_id), e.what());
+      }
+      road_log_.push_back(std::move(entry));
     }
   }
 
   const Options& o_;
+  std::unique_ptr<seg::Segmenter> model_;  // null: labels from o_.semantic_channel
   const skeleton::Skeleton& sk_;
   tracking::RoadTracker tracker_;
   bev::BevBuilder builder_;
   lanes::ExplorerOptions explorer_;
   mapping::MapAssembler assembler_;
   std::map<int64_t, bev::BevGrid> grids_;
-  int roads_mapped_ = 0;
+  int roads_mapped_ = 0, roads_failed_ = 0;
+  int64_t frames_segmented_ = 0, frames_failed_ = 0;
+  nlohmann::json road_log_ = nlohmann::json::array();
 };
+
+// The configured segmentation model (config/segmenter.yaml's model block, --model overriding its
+// path), as lanemap-segmenter loads it.
+std::unique_ptr<seg::Segmenter> loadModel(const Options& o) {
+  const YAML::Node config = loadYamlFile(o.segmenter_config);
+  if (config["threads"] && config["threads"].as<int>() > 0) cv::setNumThreads(config["threads"].as<int>());
+  return std::make_unique<seg::Segmenter>(seg::ModelConfig::fromSegmenterConfig(config, o.model, LANEMAP_SOURCE_DIR));
+}
 
 }  // namespace
 
@@ -144,8 +202,13 @@ int main(int argc, char** argv) {
   CLI::App app{"Maps a recorded drive offline: the live graph's core stages on an LCM log, as fast as the CPU allows"};
   app.add_option("--log", o.log, "LCM log of the drive (lanemap-sim's drive.lcmlog or an lcm-logger recording)")->required();
   app.add_option("--osm", o.osm, "road-level OSM file of the area (.osm or .osm.pbf)")->required();
-  app.add_option("--out", o.out, "output folder (created): map.osm, map.geojson, map.png, bev/")->required();
-  app.add_option("--semantic-channel", o.semantic_channel, "label channel: SEMANTIC_FRONT (segmenter) or SEMANTIC_FRONT_TRUTH (oracle)");
+  app.add_option("--out", o.out, "output folder (created): map.osm, map.geojson, map.png, summary.json, bev/")->required();
+  auto* oracle = app.add_flag("--oracle", o.oracle, "map on the simulator's truth labels (SEMANTIC_FRONT_TRUTH), no model");
+  app.add_option("--semantic-channel", o.semantic_channel,
+                 "map on the labels of this channel of the log (e.g. SEMANTIC_FRONT from lanemap-segmenter --log-out), no model")
+      ->excludes(oracle);
+  app.add_option("--segmenter-config", o.segmenter_config, "segmentation model config (its model block)")->capture_default_str();
+  app.add_option("--model", o.model, "ONNX model, instead of the segmenter config's model.path");
   app.add_flag("--no-lidar", o.no_lidar, "project on the flat plane only");
   app.add_option("--vehicle", o.vehicle, "camera and LIDAR calibration")->capture_default_str();
   app.add_option("--bev-config", o.bev_config, "BEV builder options")->capture_default_str();
@@ -162,8 +225,12 @@ int main(int argc, char** argv) {
     const auto sk = skeleton::Skeleton::build(osm_data);
     lcm::LogFile log(o.log, "r");
     if (!log.good()) throw std::runtime_error("cannot read LCM log: " + o.log);
+    if (o.oracle) o.semantic_channel = channels::kSemanticFrontTruth;
+    std::unique_ptr<seg::Segmenter> model;
+    if (o.semantic_channel.empty()) model = loadModel(o);
+    const std::string labels = model ? "model " + model->name() + " on " + channels::kCameraFront : o.semantic_channel;
     fs::create_directories(fs::path(o.out) / "bev");
-    OfflineMapper mapper(o, sk, osm_data.restrictions);
+    OfflineMapper mapper(o, sk, osm_data.restrictions, std::move(model));
     const auto log_size = std::max<uintmax_t>(1, fs::file_size(o.log));
     int64_t events = 0;
     while (const lcm::LogEvent* ev = log.readNextEvent()) {
@@ -173,8 +240,22 @@ int main(int argc, char** argv) {
       }
     }
     mapper.finish();
-    const map::LaneMap map = mapper.assembler().map();
-    if (map.lanelets.empty()) throw std::runtime_error("no road was mapped: did the drive reach an intersection?");
+    std::vector<std::string> junction_failures;
+    const map::LaneMap map = mapper.assembler().map(&junction_failures);
+    for (const auto& f : junction_failures) std::fprintf(stderr, "lanemap-offline: %s failed, the rest is mapped\n", f.c_str());
+    const auto s = mapper.builder().stats();
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    nlohmann::json summary = {{"log", o.log}, {"labels", labels}, {"roads_mapped", mapper.roadsMapped()},
+                              {"roads_failed", mapper.roadsFailed()}, {"roads", mapper.roadLog()},
+                              {"intersections_failed", junction_failures},
+                              {"lanelets", map.lanelets.size()}, {"frames_projected", s.frames_projected},
+                              {"frames_mesh", s.frames_mesh}, {"frames_segmented", mapper.framesSegmented()},
+                              {"frames_failed", mapper.framesFailed()}, {"seconds", secs}};
+    io::writeFileAtomically((fs::path(o.out) / "summary.json").string(), summary.dump(2) + "\n");
+    if (map.lanelets.empty()) {
+      throw std::runtime_error(mapper.roadsFailed() > 0 ? "no road was mapped: every road explored failed (see summary.json)"
+                                                        : "no road was mapped: did the drive reach an intersection?");
+    }
     io::writeLanelet2(map, (fs::path(o.out) / "map.osm").string());
     io::writeGeoJson(map, (fs::path(o.out) / "map.geojson").string());
     io::MapPngOptions png;
@@ -185,12 +266,10 @@ int main(int argc, char** argv) {
     }
     png.bbox = Eigen::AlignedBox2d(extent.min() - Eigen::Vector2d(40, 40), extent.max() + Eigen::Vector2d(40, 40));
     io::writeMapPng(map, (fs::path(o.out) / "map.png").string(), png);
-    const auto s = mapper.builder().stats();
-    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("lanemap-offline: %d roads mapped, %zu lanelets; %lld frames projected (%lld on the LIDAR mesh); %.1f s\n",
-                mapper.roadsMapped(), map.lanelets.size(), static_cast<long long>(s.frames_projected),
-                static_cast<long long>(s.frames_mesh), secs);
-    std::printf("wrote %s/map.osm, map.geojson, map.png\n", o.out.c_str());
+    std::printf("lanemap-offline: %d roads mapped, %d failed, %zu lanelets; labels: %s; %lld frames projected (%lld on the LIDAR mesh); %.1f s\n",
+                mapper.roadsMapped(), mapper.roadsFailed(), map.lanelets.size(), labels.c_str(),
+                static_cast<long long>(s.frames_projected), static_cast<long long>(s.frames_mesh), secs);
+    std::printf("wrote %s/map.osm, map.geojson, map.png, summary.json\n", o.out.c_str());
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "lanemap-offline: " << e.what() << "\n";

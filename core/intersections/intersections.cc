@@ -541,7 +541,8 @@ IntersectionResult buildIntersection(const skeleton::Skeleton& skeleton, int64_t
 std::vector<IntersectionResult> buildIntersections(const skeleton::Skeleton& skeleton,
                                                    const std::map<int64_t, map::LaneMap>& roads,
                                                    const IntersectionOptions& options,
-                                                   const std::vector<osm::Restriction>& restrictions) {
+                                                   const std::vector<osm::Restriction>& restrictions,
+                                                   std::vector<std::string>* failures) {
   std::vector<IntersectionResult> out;
   for (const auto& in : skeleton.intersections()) {
     const auto known = [&](const std::vector<int64_t>& ids) {
@@ -550,8 +551,12 @@ std::vector<IntersectionResult> buildIntersections(const skeleton::Skeleton& ske
     if (!known(in.incoming) || !known(in.outgoing)) continue;
     IntersectionOptions o = options;
     o.id_base = 0;  // per intersection
-    IntersectionResult r = buildIntersection(skeleton, in.id, roads, o, restrictions);
-    if (!r.connections.empty()) out.push_back(std::move(r));
+    try {
+      IntersectionResult r = buildIntersection(skeleton, in.id, roads, o, restrictions);
+      if (!r.connections.empty()) out.push_back(std::move(r));
+    } catch (const std::exception& e) {
+      if (failures) failures->push_back("intersection " + std::to_string(in.id) + ": " + e.what());
+    }
   }
   return out;
 }

@@ -120,10 +120,13 @@ IntersectionResult buildIntersection(const skeleton::Skeleton& skeleton, int64_t
                                      const std::vector<osm::Restriction>& restrictions = {});
 
 // Every intersection with at least one incoming and one outgoing road in `roads`.
+// One intersection whose building throws is left out, named in `failures` when given ("intersection
+// ID: reason"): one junction's trouble never costs the rest of the map.
 std::vector<IntersectionResult> buildIntersections(const skeleton::Skeleton& skeleton,
                                                    const std::map<int64_t, map::LaneMap>& roads,
                                                    const IntersectionOptions& options = {},
-                                                   const std::vector<osm::Restriction>& restrictions = {});
+                                                   const std::vector<osm::Restriction>& restrictions = {},
+                                                   std::vector<std::string>* failures = nullptr);
 
 // Appends the fragment's lines and lanelets to `whole` and adds each intersection lanelet to the
 // successors of its incoming road lanelet (when `whole` has it). Replaces an earlier fragment of

@@ -11,7 +11,7 @@ MapAssembler::MapAssembler(const skeleton::Skeleton& skeleton, intersections::In
 
 void MapAssembler::setRoad(int64_t road_id, map::LaneMap lanes) { roads_[road_id] = std::move(lanes); }
 
-map::LaneMap MapAssembler::map() const {
+map::LaneMap MapAssembler::map(std::vector<std::string>* failures) const {
   map::LaneMap all;
   const auto& o = skeleton_.frame().origin();
   all.origin_lat = o.lat;
@@ -24,7 +24,7 @@ map::LaneMap MapAssembler::map() const {
     }
     all.lanelets.insert(all.lanelets.end(), m.lanelets.begin(), m.lanelets.end());
   }
-  for (const auto& r : intersections::buildIntersections(skeleton_, roads_, options_, restrictions_)) {
+  for (const auto& r : intersections::buildIntersections(skeleton_, roads_, options_, restrictions_, failures)) {
     intersections::appendIntersection(all, r);
   }
   return all;

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <map>
+#include <string>
 #include <vector>
 
 namespace lanemap::mapping {
@@ -27,8 +28,9 @@ class MapAssembler {
   const std::map<int64_t, map::LaneMap>& roads() const { return roads_; }
 
   // Every road's lanelets (roads in id order) plus the intersections built from them, in the
-  // skeleton's ENU origin: deterministic for the same roads.
-  map::LaneMap map() const;
+  // skeleton's ENU origin: deterministic for the same roads. An intersection that cannot be built
+  // is left out and named in `failures` (when given).
+  map::LaneMap map(std::vector<std::string>* failures = nullptr) const;
 
  private:
   const skeleton::Skeleton& skeleton_;

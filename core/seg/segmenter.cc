@@ -42,6 +42,16 @@ std::array<double, 3> triple(const YAML::Node& node, const char* key, std::array
 
 }  // namespace
 
+ModelConfig ModelConfig::fromSegmenterConfig(const YAML::Node& config, const std::string& model_path,
+                                              const std::string& base_dir) {
+  YAML::Node node = config["model"] ? YAML::Clone(config["model"]) : YAML::Node(YAML::NodeType::Map);
+  if (!model_path.empty()) {
+    node["path"] = model_path;
+    if (!config["model"] || !config["model"]["name"]) node.remove("name");
+  }
+  return fromYaml(node, base_dir);
+}
+
 ModelConfig ModelConfig::fromYaml(const YAML::Node& node, const std::string& base_dir) {
   if (!node || !node.IsMap()) throw ModelError("model config: expected a map with at least 'path'");
   static const char* kKeys[] = {"path", "name", "input_width", "input_height", "crop_top", "rgb", "scale", "mean",

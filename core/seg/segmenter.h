@@ -55,6 +55,11 @@ struct ModelConfig {
   // class_map, upsample (scores|labels). Relative paths resolve against base_dir (if not empty)
   // when the file is not found as given. Throws ModelError naming the key.
   static ModelConfig fromYaml(const YAML::Node& node, const std::string& base_dir = "");
+  // The `model:` block of a segmenter config (config/segmenter.yaml), its path replaced by
+  // `model_path` when that is not empty (the name then defaults to the new file's stem unless the
+  // config names the model): how lanemap-segmenter and lanemap-offline load the configured model.
+  static ModelConfig fromSegmenterConfig(const YAML::Node& config, const std::string& model_path = "",
+                                         const std::string& base_dir = "");
 };
 
 class Segmenter {

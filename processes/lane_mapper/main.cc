@@ -150,7 +150,10 @@ class LaneMapperApp {
   void writeWholeMap() {
     mapping::MapAssembler assembler(*sk_, intersection_options_, restrictions_);
     for (const auto& [id, m] : roads_) assembler.setRoad(id, m);
-    const map::LaneMap all = assembler.map();
+    std::vector<std::string> failures;
+    const map::LaneMap all = assembler.map(&failures);
+    for (const auto& f : failures) std::cerr << "lane_mapper: " << f << " failed, the rest is mapped\n";
+    process_.counters().set("intersections_failed", static_cast<int64_t>(failures.size()));
     if (!all.lanelets.empty()) io::writeLanelet2(all, wholeMapFile());
   }
 

@@ -262,12 +262,7 @@ int main(int argc, char** argv) {
     int threads = 0;
     read(config, "threads", threads);
     if (threads > 0) cv::setNumThreads(threads);
-    YAML::Node model_node = config["model"] ? YAML::Clone(config["model"]) : YAML::Node(YAML::NodeType::Map);
-    if (!model_flag.empty()) {
-      model_node["path"] = model_flag;
-      if (!config["model"] || !config["model"]["name"]) model_node.remove("name");
-    }
-    const seg::ModelConfig mc = seg::ModelConfig::fromYaml(model_node, LANEMAP_SOURCE_DIR);
+    const seg::ModelConfig mc = seg::ModelConfig::fromSegmenterConfig(config, model_flag, LANEMAP_SOURCE_DIR);
     auto model = std::make_unique<seg::Segmenter>(mc);
     std::cerr << "segmenter: model " << mc.path << " (" << model->modelClasses() << " classes, input "
               << mc.input_width << "x" << mc.input_height << "), " << s.camera_channel << " -> "

@@ -64,7 +64,7 @@ TEST(LiveGraph, MapsTheDriveLikeTheOfflineRunner) {
   }
   const std::string drive = lt::sharedSimDrive("osm/west-oakland.osm", lt::kBevDriveSeconds, lt::kBevDriveSeed, lt::kBevDriveArgs);
   lt::TempDir out("live-graph");
-  const auto offline = lt::runCommand(lt::binPath("lanemap-offline") + " -q --log " + drive + "/drive.lcmlog --osm " + drive +
+  const auto offline = lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --log " + drive + "/drive.lcmlog --osm " + drive +
                                       "/roads.osm --out " + out.str("offline"));
   ASSERT_EQ(offline.exit_code, 0) << offline.output;
   const auto live = lt::runCommand(lt::binPath("lanemap-launch") + " " + LANEMAP_SOURCE_DIR +

@@ -20,7 +20,7 @@ namespace lt = lanemap::testing;
 TEST(Offline, MapsTheDrivenRoadsAndScoresAgainstTheTruth) {
   const std::string drive = lt::sharedSimDrive("osm/west-oakland.osm", lt::kBevDriveSeconds, lt::kBevDriveSeed, lt::kBevDriveArgs);
   lt::TempDir out("offline");
-  const auto r = lt::runCommand(lt::binPath("lanemap-offline") + " -q --log " + drive + "/drive.lcmlog --osm " + drive +
+  const auto r = lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --log " + drive + "/drive.lcmlog --osm " + drive +
                                 "/roads.osm --out " + out.str("map"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const char* f : {"map.osm", "map.geojson", "map.png"}) EXPECT_TRUE(std::filesystem::exists(out.str("map/") + f)) << f;
@@ -53,6 +53,39 @@ TEST(Offline, MapsTheDrivenRoadsAndScoresAgainstTheTruth) {
   EXPECT_LT(report.lane_rms_m, 0.24);
   EXPECT_GE(report.lane_precision.value(), 0.6);
   EXPECT_GE(report.lane_miou, 0.6);
+
+  // summary.json: every road explored, with its lanes, none failed; the labels it mapped on.
+  std::ifstream sj(out.str("map/summary.json"));
+  const auto summary = nlohmann::json::parse(sj);
+  EXPECT_EQ(summary["labels"], "SEMANTIC_FRONT_TRUTH");
+  EXPECT_EQ(summary["roads_failed"], 0);
+  EXPECT_EQ(summary["roads_mapped"].get<size_t>(), summary["roads"].size());
+  std::set<int64_t> explored;
+  for (const auto& r : summary["roads"]) {
+    explored.insert(r["road_id"].get<int64_t>());
+    EXPECT_GE(r["lanes"].get<int>(), 1) << r.dump();
+  }
+  EXPECT_EQ(explored, closed);
+
+  // lanemap-eval --driven: the route from scenario.json and the route map-matched from the log's
+  // POSE by the road tracker are the same roads, so the same truth is scored.
+  const std::string eval = lt::binPath("lanemap-eval") + " -q --truth " + drive + "/groundtruth.osm --map " + out.str("map/map.osm");
+  const auto a = lt::runCommand(eval + " --driven " + drive + "/scenario.json --json " + out.str("a.json"));
+  const auto b = lt::runCommand(eval + " --driven " + drive + "/drive.lcmlog --osm " + drive + "/roads.osm --json " + out.str("b.json"));
+  ASSERT_EQ(a.exit_code, 0) << a.output;
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  std::ifstream ja(out.str("a.json")), jb(out.str("b.json"));
+  const auto ra = nlohmann::json::parse(ja), rb = nlohmann::json::parse(jb);
+  EXPECT_EQ(ra["scored_area"], "driven");
+  EXPECT_EQ(ra["driven_roads"].get<size_t>(), closed.size());
+  EXPECT_EQ(rb["driven_roads"], ra["driven_roads"]);
+  EXPECT_EQ(rb["lanes"]["truth"], ra["lanes"]["truth"]);
+  EXPECT_EQ(rb["intersections"]["truth_pairs"], ra["intersections"]["truth_pairs"]);
+  // Every driven road was mapped here, so --driven scores the same truth lanes as the mapped roads.
+  EXPECT_EQ(ra["lanes"]["truth"].get<size_t>(), report.truth_lanes.size());
+  const auto bad = lt::runCommand(eval + " --driven " + drive + "/drive.lcmlog");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("--osm"), std::string::npos) << bad.output;
 }
 
 TEST(Offline, MissingLogOrOsmGiveClearErrors) {

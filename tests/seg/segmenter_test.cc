@@ -214,6 +214,22 @@ TEST(SegConfig, ErrorsNameTheKey) {
   EXPECT_FALSE(c.upsample_scores);
 }
 
+// The model block of a segmenter config, as lanemap-segmenter and lanemap-offline read it.
+TEST(SegConfig, FromSegmenterConfigWithAndWithoutAModelOverride) {
+  const YAML::Node config = YAML::Load("{threads: 2, model: {path: models/lanesegnet.onnx, name: v3, crop_top: 120}}");
+  const auto a = seg::ModelConfig::fromSegmenterConfig(config, "", kRoot);
+  EXPECT_EQ(a.path, kRoot + "/models/lanesegnet.onnx");
+  EXPECT_EQ(a.name, "v3");
+  EXPECT_EQ(a.crop_top, 120);
+  const YAML::Node unnamed = YAML::Load("{model: {path: models/lanesegnet.onnx, crop_top: 120}}");
+  const auto b = seg::ModelConfig::fromSegmenterConfig(unnamed, "/tmp/other.onnx");
+  EXPECT_EQ(b.path, "/tmp/other.onnx");
+  EXPECT_EQ(b.name, "other");  // the override's stem, not the config's file
+  EXPECT_EQ(b.crop_top, 120);  // the rest of the block stays
+  EXPECT_EQ(seg::ModelConfig::fromSegmenterConfig(config, "/tmp/other.onnx").name, "v3");  // named in the config
+  EXPECT_THROW(seg::ModelConfig::fromSegmenterConfig(YAML::Load("{threads: 2}")), seg::ModelError);
+}
+
 TEST(SegFrames, DecodeErrorsAreClear) {
   cv::Mat img(360, 640, CV_8UC3, cv::Scalar(10, 20, 30));
   std::vector<uint8_t> jpeg;

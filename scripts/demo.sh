@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# make demo: simulate a drive over the bundled West Oakland street network, segment its camera
-# frames with the shipped model, map it with the offline runner (road tracker -> BEV on the LIDAR
-# mesh -> lane exploration -> intersections), score the map against the ground truth; then the
-# same on the simulator's truth labels, offline and through the live process graph.
+# make demo: simulate a drive over the bundled West Oakland street network, map it with the offline
+# runner (camera frames segmented with the shipped model -> road tracker -> BEV on the LIDAR mesh ->
+# lane exploration -> intersections), score the map against the ground truth of the roads the car
+# drove (lanemap-eval --driven); then the same on the simulator's truth labels, offline and through
+# the live process graph.
 # Usage: scripts/demo.sh BUILD_DIR OUT_DIR
 set -euo pipefail
 build=${1:-build}
@@ -21,19 +22,14 @@ echo "== simulating a 60 s drive (seed 1)"
 echo "== what the log holds"
 "$bin/lanemap-lcm-stats" --log "$out/drive/drive.lcmlog"
 
-echo "== segmenting the camera frames with the shipped model (lanemap-segmenter, offline mode)"
-"$bin/lanemap-segmenter" --config config/segmenter.yaml --lcm-url memq:// \
-  --log-in "$out/drive/drive.lcmlog" --log-out "$out/drive/segmented.lcmlog" | tail -n 1
+echo "== mapping the drive (lanemap-offline: segments CAMERA_FRONT with the shipped model, BEV, lanes, intersections)"
+"$bin/lanemap-offline" --log "$out/drive/drive.lcmlog" --osm "$out/drive/roads.osm" --out "$out/map"
+echo "== scores on the roads the car drove (lanemap-eval --driven scenario.json), model labels"
+"$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/map/map.osm" --driven "$out/drive/scenario.json" --json "$out/map/eval.json"
 
-echo "== mapping the drive on the model's labels (lanemap-offline, SEMANTIC_FRONT)"
-"$bin/lanemap-offline" --log "$out/drive/segmented.lcmlog" --osm "$out/drive/roads.osm" --out "$out/map" \
-  --semantic-channel SEMANTIC_FRONT
-echo "== scores on the roads the drive mapped (lanemap-eval --mapped-roads-only), model labels"
-"$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/map/map.osm" --mapped-roads-only --json "$out/map/eval.json"
-
-echo "== the same with the simulator's truth labels (oracle), for comparison"
-"$bin/lanemap-offline" -q --log "$out/drive/drive.lcmlog" --osm "$out/drive/roads.osm" --out "$out/map-oracle"
-"$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/map-oracle/map.osm" --mapped-roads-only --json "$out/map-oracle/eval.json"
+echo "== the same with the simulator's truth labels (lanemap-offline --oracle), for comparison"
+"$bin/lanemap-offline" -q --oracle --log "$out/drive/drive.lcmlog" --osm "$out/drive/roads.osm" --out "$out/map-oracle"
+"$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/map-oracle/map.osm" --driven "$out/drive/scenario.json" --json "$out/map-oracle/eval.json"
 
 echo "== the live graph (oracle labels): lcm-logplayer at 1x -> segmenter --oracle -> road_tracker -> bev_builder"
 echo "   -> lane_mapper over LCM (lanemap-launch config/launch/demo.yaml, inside a private network namespace; about 70 s)"
@@ -45,7 +41,7 @@ echo "== did the live graph keep up? (lanemap-graph-report: STATUS counters, lat
 "$bin/lanemap-graph-report" --log "$out/live/graph.lcmlog" --drive-log "$out/drive/drive.lcmlog" | tee "$out/live/report.txt"
 cp "$out/live/lane_map.osm" "$out/live/map.osm"
 echo "== live map vs the truth, and vs the offline oracle map"
-"$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/live/map.osm" --mapped-roads-only --json "$out/live/eval.json"
+"$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/live/map.osm" --driven "$out/drive/scenario.json" --json "$out/live/eval.json"
 "$bin/lanemap-eval" --truth "$out/map-oracle/map.osm" --map "$out/live/map.osm" --json "$out/live/vs_offline.json" | grep -E "^lanes|precision"
 
 cat <<EOT
@@ -58,6 +54,7 @@ Demo output in $out/:
   drive/roads.osm                   the road-level OSM the mapper is given
   drive/scenario.json               route, seed, options, counts
   map/map.osm, map.geojson, map.png the lane map built from the drive on the model's labels
+  map/summary.json                  every road explored (lanes, or why it failed), labels, timing
   map/eval.json                     its scores against drive/groundtruth.osm
   map-oracle/                       the same on the simulator's truth labels
   live/map.osm, live/eval.json      the drive mapped by the live process graph over LCM (oracle)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Issue 6's bar: on simulated drives with oracle labels (the simulator's truth segmentation, so the
 # figures measure the mapping, not the segmenter), the whole camera path (BEV on the LIDAR mesh,
-# lane exploration, intersections) scored by lanemap-eval --mapped-roads-only against the truth,
+# lane exploration, intersections) scored by lanemap-eval --driven (the roads the car drove) against the truth,
 # pooled over the drives and printed beside the paper's best (METHOD.md section 6: atomic roads
 # P 0.84 R 0.73 RMS 0.24 m mIoU 0.79; intersections P 0.91 R 0.80 RMS 0.24 m).
 # Usage: tools/bench/oracle_drives.sh BUILD_DIR [OUT_DIR]   (about 15 minutes on 2 cores)
@@ -23,10 +23,9 @@ for spec in "${drives[@]}"; do
     "$bin/lanemap-sim" -q --osm "data/osm/$osm" --out "$d/drive" --seed "$seed" --duration "$seconds"
   fi
   rm -rf "$d/map"
-  "$bin/lanemap-offline" -q --log "$d/drive/drive.lcmlog" --osm "$d/drive/roads.osm" --out "$d/map" \
-    --semantic-channel SEMANTIC_FRONT_TRUTH >/dev/null
+  "$bin/lanemap-offline" -q --oracle --log "$d/drive/drive.lcmlog" --osm "$d/drive/roads.osm" --out "$d/map" >/dev/null
   echo "== $name: $seconds s, oracle labels"
-  "$bin/lanemap-eval" --truth "$d/drive/groundtruth.osm" --map "$d/map/map.osm" --mapped-roads-only \
+  "$bin/lanemap-eval" --truth "$d/drive/groundtruth.osm" --map "$d/map/map.osm" --driven "$d/drive/scenario.json" \
     --json "$d/map/eval.json" | sed -n '3,7p'
   reports+=("$d/map/eval.json")
 done

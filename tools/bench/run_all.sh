@@ -41,6 +41,11 @@ echo "== segmenter: shipped model on 640x360 frames"
 echo "== live graph at real time (lcm-logplayer 1x, demo.yaml, private netns): demo drive"
 tools/bench/live_graph.sh "$build"
 
+# Issue 16: the broad benchmark (every OSM extract in data/, truth and model labels, --driven), the
+# figure of merit for the mapping stages; about 5 minutes of one core per drive, 28 drives.
+echo "== broad map-quality benchmark (tools/bench/quality.sh)"
+tools/bench/quality.sh "$build" "$out/quality"
+
 # Issue 6's bar: three 150 s simulated drives mapped on the truth labels (oracle), scored against
 # the truth and pooled beside the paper's figures (about 15 minutes).
 echo "== oracle-label drives vs the paper (lanemap-sim -> lanemap-offline -> lanemap-eval)"

@@ -1,0 +1,102 @@
+#!/usr/bin/env python3
+"""The broad benchmark's table (tools/bench/quality.sh): lanemap-eval --driven reports of every
+drive in OUT_DIR, pooled per network and over all networks, per label source, beside the paper.
+
+Pooling: precision and recall from summed counts (detections / built or truth lanes; correct /
+built or truth intersection pairs); centre-line RMS and mIoU averaged over the matched lanes of
+all drives, connection RMS over the correct pairs (each drive's mean weighted by its count).
+A drive whose mapping failed outright is scored as an empty map: every driven truth lane and
+pair missed.
+
+Usage: quality_table.py OUT_DIR LABEL [LABEL ...]   (also writes OUT_DIR/quality.json)
+"""
+import json
+import math
+import os
+import sys
+
+PAPER = {"lane_p": 0.84, "lane_r": 0.73, "rms": 0.24, "miou": 0.79, "junc_p": 0.91, "junc_r": 0.80, "conn_rms": 0.24}
+KEYS = ["lane_p", "lane_r", "rms", "miou", "junc_p", "junc_r", "conn_rms"]
+
+
+def load(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def counts(j):
+    lanes, inter = j["lanes"], j["intersections"]
+    num = lambda v: v if isinstance(v, (int, float)) and v is not None and math.isfinite(v) else None
+    return {
+        "drives": 1, "failed": 0,
+        "det": lanes["detected"], "built": lanes["built"], "truth": lanes["truth"], "matched": lanes["matched"],
+        "rms_sum": (num(lanes["rms_m"]) or 0.0) * lanes["matched"] if num(lanes["rms_m"]) is not None else 0.0,
+        "rms_n": lanes["matched"] if num(lanes["rms_m"]) is not None else 0,
+        "iou_sum": (num(lanes["miou"]) or 0.0) * lanes["matched"],
+        "ok": inter["correct_pairs"], "bp": inter["built_pairs"], "tp": inter["truth_pairs"],
+        "crms_sum": (num(inter["rms_m"]) or 0.0) * inter["correct_pairs"] if num(inter["rms_m"]) is not None else 0.0,
+        "crms_n": inter["correct_pairs"] if num(inter["rms_m"]) is not None else 0,
+    }
+
+
+def add(a, b):
+    return {k: a.get(k, 0) + b.get(k, 0) for k in set(a) | set(b)}
+
+
+def ratio(a, b):
+    return a / b if b else float("nan")
+
+
+def figures(c):
+    return {
+        "lane_p": ratio(c.get("det", 0), c.get("built", 0)), "lane_r": ratio(c.get("det", 0), c.get("truth", 0)),
+        "rms": ratio(c.get("rms_sum", 0), c.get("rms_n", 0)), "miou": ratio(c.get("iou_sum", 0), c.get("matched", 0)),
+        "junc_p": ratio(c.get("ok", 0), c.get("bp", 0)), "junc_r": ratio(c.get("ok", 0), c.get("tp", 0)),
+        "conn_rms": ratio(c.get("crms_sum", 0), c.get("crms_n", 0)),
+    }
+
+
+def fmt(v):
+    return "   -  " if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:6.3f}"
+
+
+def main():
+    out, labels = sys.argv[1], sys.argv[2:]
+    drives = sorted(d for d in os.listdir(out) if os.path.isdir(os.path.join(out, d, "drive")))
+    result = {}
+    for lab in labels:
+        per_net, total = {}, {}
+        for d in drives:
+            net = d.rsplit("-s", 1)[0]
+            p = os.path.join(out, d, f"eval-{lab}.json")
+            if not os.path.exists(p):
+                continue
+            c = counts(load(p))
+            c["failed"] = int(os.path.exists(os.path.join(out, d, f"map-{lab}", "FAILED")))
+            per_net[net] = add(per_net.get(net, {}), c)
+            total = add(total, c)
+        result[lab] = {"networks": {n: {**figures(c), "counts": c} for n, c in per_net.items()},
+                       "pooled": {**figures(total), "counts": total}}
+        print(f"\n== labels: {lab} (lanemap-eval --driven; {total.get('drives', 0)} drives, "
+              f"{total.get('failed', 0)} whose mapping failed outright)")
+        head = f"   {'network':28s} {'drives':>6s} {'lane P':>6s} {'lane R':>6s} {'RMS m':>6s} {'mIoU':>6s} " \
+               f"{'junc P':>6s} {'junc R':>6s} {'conn m':>6s}  {'lanes det/built/truth':>22s} {'pairs ok/built/truth':>21s}"
+        print(head)
+        rows = sorted(per_net.items()) + [("POOLED", total)]
+        for n, c in rows:
+            f = figures(c)
+            print(f"   {n:28s} {c.get('drives', 0):6d} " + " ".join(fmt(f[k]) for k in KEYS) +
+                  f"  {c.get('det', 0):6d}/{c.get('built', 0):6d}/{c.get('truth', 0):6d}"
+                  f"   {c.get('ok', 0):5d}/{c.get('bp', 0):5d}/{c.get('tp', 0):5d}")
+        print(f"   {'paper (Berkeley LIDAR+Cam)':28s} {'':6s} " + " ".join(fmt(PAPER[k]) for k in KEYS))
+        beat = [n for n, c in per_net.items()
+                if all(figures(c)[k] > PAPER[k] for k in ("lane_p", "lane_r", "junc_p", "junc_r"))]
+        print(f"   networks that beat the paper on lane P/R and junction P/R: {len(beat)} of {len(per_net)}")
+    clean = lambda v: {k: clean(x) for k, x in v.items()} if isinstance(v, dict) else (
+        None if isinstance(v, float) and math.isnan(v) else v)
+    with open(os.path.join(out, "quality.json"), "w") as f:
+        json.dump(clean(result), f, indent=2)
+
+
+if __name__ == "__main__":
+    main()

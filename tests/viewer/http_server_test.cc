@@ -256,6 +256,9 @@ TEST(ViewerHttp, EventStreamSendsState) {
   EXPECT_NE(all.find("Content-Type: text/event-stream"), std::string::npos);
   EXPECT_NE(all.find("event: state\ndata: {\"version\":1}\n\n"), std::string::npos) << all;
   EXPECT_FALSE(closed);
+  // Still open well past the idle timeout: a stream is not an idle connection.
+  lt::readUntil(fd, 1200, &closed);
+  EXPECT_FALSE(closed);
   close(fd);
   expectStillServes(server->port());
 }

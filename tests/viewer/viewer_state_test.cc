@@ -207,7 +207,7 @@ TEST(ViewerState, LanesInAnotherOriginAreMovedIntoTheSkeletonFrame) {
 TEST(ViewerState, TrailKeepsPointsApartCapsAndPages) {
   auto sk = westOakland();
   viewer::ViewerOptions o;
-  o.trail_spacing_m = 1.0;
+  o.trail_spacing_m = 0.9;  // poses come 0.5 m apart: every second one is kept
   o.max_trail_points = 15;
   viewer::ViewerState state(sk, {}, {}, o);
   // 41 poses 0.5 m apart eastwards: every second one is kept (21 points over 20 m).
@@ -240,8 +240,8 @@ TEST(ViewerState, BevPictureIsTransparentWhereUnobservedAndPlacedByItsCells) {
   viewer::ViewerState state(sk);
   EXPECT_EQ(state.bevPng(), "");
   bev::BevGrid grid;  // 0.1 m cells, 128-cell tiles
-  // A 10 m x 4 m drivable strip from (5, 2) m east/north.
-  for (int i = 50; i < 150; ++i) {
+  // A 10 m x 4 m drivable strip from (2, 2) m east/north, inside the first tile.
+  for (int i = 20; i < 120; ++i) {
     for (int j = 20; j < 60; ++j) {
       grid.add({i, j}, bev::Layer::kObserved, 4);
       grid.add({i, j}, bev::Layer::kDrivable, 4);

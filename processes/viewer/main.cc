@@ -36,6 +36,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <regex>
 #include <string>
@@ -253,8 +254,9 @@ int64_t queryInt(const std::string& query, const std::string& key, int64_t fallb
   return fallback;
 }
 
-viewer::HttpHandler makeHandler(viewer::ViewerState& state, std::map<std::string, viewer::StaticAsset> assets) {
-  return [&state, assets = std::move(assets)](const viewer::HttpRequest& req) -> viewer::HttpResponse {
+viewer::HttpHandler makeHandler(viewer::ViewerState& state, std::map<std::string, viewer::StaticAsset> assets, Counters& counters) {
+  return [&state, &counters, assets = std::move(assets)](const viewer::HttpRequest& req) -> viewer::HttpResponse {
+    counters.add("http_requests");
     const std::string& p = req.path;
     if (p == "/api/state") return json(state.stateJson(monotonicSeconds()));
     if (p == "/api/events") {
@@ -366,6 +368,12 @@ int main(int argc, char** argv) {
     read(config, "trail_spacing_m", vo.trail_spacing_m);
     read(config, "bev_max_px", vo.bev_max_px);
     read(config, "status_stale_s", vo.status_stale_s);
+    if (!store.empty()) {
+      // A finished run: its last STATUS is old by nature; show it as recorded, drops included,
+      // without calling anything behind for being silent or for drops long past.
+      vo.status_stale_s = std::numeric_limits<double>::infinity();
+      vo.loss_window_s = -1.0;
+    }
     viewer::ViewerState state(sk, osm_data.restrictions, intersections::IntersectionOptions::fromYaml(config["intersections"]), vo);
 
     viewer::HttpServerOptions so;
@@ -391,7 +399,7 @@ int main(int argc, char** argv) {
       last = v;
       return "event: state\ndata: " + state.stateJson(monotonicSeconds()) + "\n\n";
     };
-    viewer::HttpServer server(so, makeHandler(state, std::move(assets_map)), events);
+    viewer::HttpServer server(so, makeHandler(state, std::move(assets_map), process.counters()), events);
     server.start();
     const std::string host = listen.find(':') != std::string::npos ? "[" + listen + "]" : listen;
     const std::string url = "http://" + (listen == "0.0.0.0" ? std::string("127.0.0.1") : host) + ":" + std::to_string(server.port()) + "/";
@@ -404,7 +412,6 @@ int main(int argc, char** argv) {
     }
     process.setState("ready");
     const int rc = process.spin();
-    process.counters().set("http_requests", static_cast<int64_t>(server.requests()));
     server.stop();
     return rc;
   } catch (const std::exception& e) {

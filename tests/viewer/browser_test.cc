@@ -172,19 +172,19 @@ TEST(ViewerBrowser, PageShowsTheFirstClosedRoadsLanesTheCarAndEveryProcess) {
   const fs::path artefacts = fs::path(LANEMAP_BIN_DIR).parent_path() / "test-artifacts";
   fs::create_directories(artefacts);
 
-  LaneMapListener lane_maps;
+  // The browser first (Chromium takes seconds to start), then the graph.
   lt::ChildProcess driver({"/usr/bin/chromedriver", "--port=" + std::to_string(kDriverPort), "--log-path=" + out.str("chromedriver.log")});
   ASSERT_TRUE(driver.started());
+  ASSERT_TRUE(waitFor([] { return lt::statusCode(lt::httpCall(kDriverPort, "GET", "/status", "", 2000)) == 200; }, 30));
+  WebDriver browser;
+  ASSERT_TRUE(browser.open(out.str("profile")));
+  LaneMapListener lane_maps;
   lt::ChildProcess graph({lt::binPath("lanemap-launch"), std::string(LANEMAP_SOURCE_DIR) + "/config/launch/demo.yaml", "--all-hosts",
                           "--status-interval", "0", "--set", "drive=" + drive, "--set", "store=" + out.str("store"),
                           "--set", "viewer_port=" + std::to_string(kViewerPort), "--log-dir", out.str("logs")});
   ASSERT_TRUE(graph.started());
   ASSERT_TRUE(waitFor([] { return lt::statusCode(lt::httpCall(kViewerPort, "GET", "/api/state", "", 2000)) == 200; }, 60))
       << "the viewer never answered" << processLogs(out.str("logs"));
-  ASSERT_TRUE(waitFor([] { return lt::statusCode(lt::httpCall(kDriverPort, "GET", "/status", "", 2000)) == 200; }, 30));
-
-  WebDriver browser;
-  ASSERT_TRUE(browser.open(out.str("profile")));
   browser.navigate("http://127.0.0.1:" + std::to_string(kViewerPort) + "/");
   const auto started = std::chrono::steady_clock::now();
 

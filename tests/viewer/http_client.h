@@ -9,7 +9,9 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <chrono>
+#include <cstdlib>
 #include <cstdint>
 #include <string>
 
@@ -63,6 +65,20 @@ inline std::string readUntil(int fd, int timeout_ms, bool* closed = nullptr, con
   return out;
 }
 
+// True when `data` holds a whole response: headers, then Content-Length bytes of body, or a
+// chunked body up to its last chunk (servers may keep the connection open despite
+// "Connection: close"). A response without either ends when the server closes.
+inline bool completeResponse(const std::string& data) {
+  const size_t h = data.find("\r\n\r\n");
+  if (h == std::string::npos) return false;
+  std::string head = data.substr(0, h);
+  for (auto& c : head) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const size_t cl = head.find("content-length:");
+  if (cl != std::string::npos) return data.size() - (h + 4) >= std::stoul(head.substr(cl + 15));
+  if (head.find("transfer-encoding: chunked") != std::string::npos) return data.find("\r\n0\r\n\r\n", h) != std::string::npos;
+  return false;
+}
+
 // Sends `request` on a fresh connection and reads the answer until the server closes.
 inline std::string exchange(uint16_t port, const std::string& request, int timeout_ms = 5000) {
   const int fd = connectLoopback(port);
@@ -112,7 +128,17 @@ inline std::string httpCall(uint16_t port, const std::string& method, const std:
   const int fd = connectLoopback(port);
   if (fd < 0) return "";
   sendAll(fd, req);
-  std::string r = readUntil(fd, timeout_ms);
+  std::string r;
+  char buf[65536];
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  while (!completeResponse(r)) {
+    const int left = static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now()).count());
+    pollfd p{fd, POLLIN, 0};
+    if (left <= 0 || poll(&p, 1, left) <= 0) break;
+    const ssize_t n = recv(fd, buf, sizeof(buf), 0);
+    if (n <= 0) break;
+    r.append(buf, static_cast<size_t>(n));
+  }
   close(fd);
   return r;
 }

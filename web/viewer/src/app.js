@@ -185,7 +185,7 @@
     stats.lastCar = ll;
     stats.carMovedM = metres(stats.firstCar, ll);
     if (document.getElementById('follow').checked) {
-      if (map.getZoom() < 16) map.setView(ll, 17, { animate: false });
+      if (map.getZoom() < 17) map.setView(ll, 18, { animate: false });
       else map.panTo(ll, { animate: false });
     }
   }

@@ -18,6 +18,8 @@ namespace {
 
 using nlohmann::json;
 
+constexpr uint8_t kBackgroundAlpha = 64;  // BEV cells seen, but only as background
+
 double round6(double v) { return std::round(v * 1e7) / 1e7; }
 
 // A JSON number, or null for NaN/inf (JSON has no NaN).
@@ -120,13 +122,17 @@ void ViewerState::setBev(int64_t road_id, const bev::BevGrid& grid) {
   bev::RenderOptions ro;
   ro.scale = 1;
   cv::Mat bgr = bev::renderBev(grid, {}, ro);
-  // Unobserved cells (black) become transparent, so the map shows through.
+  // Unobserved cells (black) become transparent and cells seen only as background faint, so the
+  // map shows through and the lanes and markings stand out.
   cv::Mat bgra;
   cv::cvtColor(bgr, bgra, cv::COLOR_BGR2BGRA);
+  const cv::Vec3b background = bev::layerColour(bev::Layer::kObserved);
   for (int r = 0; r < bgra.rows; ++r) {
     auto* row = bgra.ptr<cv::Vec4b>(r);
     for (int c = 0; c < bgra.cols; ++c) {
-      if (row[c][0] == 0 && row[c][1] == 0 && row[c][2] == 0) row[c][3] = 0;
+      const cv::Vec4b& px = row[c];
+      if (px[0] == 0 && px[1] == 0 && px[2] == 0) row[c][3] = 0;
+      else if (px[0] == background[0] && px[1] == background[1] && px[2] == background[2]) row[c][3] = kBackgroundAlpha;
     }
   }
   const int longest = std::max(bgra.cols, bgra.rows);

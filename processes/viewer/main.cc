@@ -178,7 +178,8 @@ class LiveFeed {
   viewer::ViewerState& state_;
 };
 
-// A finished map store: every road's lanes (<store>/lanes/road_<id>.osm); the car's trail, the
+// A finished map store: every road's lanes (<store>/lanes/road_<id>.osm), the BEV grid written
+// last (<store>/bev/road_<id>.bev); the car's trail, the
 // roads driven and the last STATUS of each process from <store>/graph.lcmlog when the run
 // recorded one (read as a file: no LCM bus).
 void loadStore(const std::string& store, viewer::ViewerState& state) {
@@ -205,6 +206,27 @@ void loadStore(const std::string& store, viewer::ViewerState& state) {
     }
   }
   std::cerr << "viewer: " << loaded << " mapped roads from " << lanes << "\n";
+  // The BEV layer: the grid written last (<store>/bev/road_<id>.bev).
+  const std::regex bev_name("road_(-?[0-9]+)\\.bev");
+  fs::path newest;
+  int64_t newest_id = -1;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(fs::path(store) / "bev", ec)) {
+    std::smatch mt;
+    const std::string fname = entry.path().filename().string();
+    if (!std::regex_match(fname, mt, bev_name)) continue;
+    if (newest.empty() || fs::last_write_time(entry.path()) > fs::last_write_time(newest)) {
+      newest = entry.path();
+      newest_id = std::stoll(mt[1]);
+    }
+  }
+  if (!newest.empty()) {
+    try {
+      state.setBev(newest_id, bev::BevGrid::load(newest.string()));
+    } catch (const std::exception& e) {
+      std::cerr << "viewer: skipping " << newest << ": " << e.what() << "\n";
+    }
+  }
   const fs::path log = fs::path(store) / "graph.lcmlog";
   if (!fs::exists(log)) return;
   lcm::LogFile file(log.string(), "r");

@@ -235,7 +235,7 @@ TEST(ViewerState, TrailKeepsPointsApartCapsAndPages) {
   EXPECT_EQ(state.stateValue(0.0)["car"]["poses"], 41);
 }
 
-TEST(ViewerState, BevPictureIsTransparentWhereUnobservedAndPlacedByItsCells) {
+TEST(ViewerState, BevPictureIsTransparentWhereUnobservedFaintOnBackgroundAndPlacedByItsCells) {
   auto sk = westOakland();
   viewer::ViewerState state(sk);
   EXPECT_EQ(state.bevPng(), "");
@@ -247,6 +247,7 @@ TEST(ViewerState, BevPictureIsTransparentWhereUnobservedAndPlacedByItsCells) {
       grid.add({i, j}, bev::Layer::kDrivable, 4);
     }
   }
+  grid.add({10, 10}, bev::Layer::kObserved, 4);  // seen, background only
   EXPECT_THROW(state.setBev(7, bev::BevGrid()), bev::BevError);
   state.setBev(7, grid);
   const std::string png = state.bevPng();
@@ -259,6 +260,9 @@ TEST(ViewerState, BevPictureIsTransparentWhereUnobservedAndPlacedByItsCells) {
   // North up: ENU cell (100, 40) is at row 127 - 40; cell (10, 100) was never observed.
   EXPECT_EQ(img.at<cv::Vec4b>(127 - 40, 100)[3], 255);
   EXPECT_EQ(img.at<cv::Vec4b>(127 - 100, 10)[3], 0);
+  const uint8_t faint = img.at<cv::Vec4b>(127 - 10, 10)[3];  // background: faint, neither hidden nor opaque
+  EXPECT_GT(faint, 0);
+  EXPECT_LT(faint, 128);
   const json s = state.stateValue(0.0);
   EXPECT_EQ(s["bev"]["road_id"], 7);
   const geo::LatLonAlt sw = sk->frame().toWgs84(Eigen::Vector3d(0, 0, 0));

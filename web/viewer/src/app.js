@@ -14,6 +14,11 @@
     stop_line: { color: '#e03131', weight: 3 },
   };
 
+  // ?zoom=N: the zoom level when following the car (default 18); ?follow=0: do not follow it.
+  const params = new URLSearchParams(location.search);
+  const followZoom = Math.min(20, Math.max(10, parseInt(params.get('zoom') || '18', 10) || 18));
+  if (params.get('follow') === '0') document.getElementById('follow').checked = false;
+
   const stats = {
     stateUpdates: 0, skeletonRoads: 0, roadLanesDrawn: 0, connectionsDrawn: 0, lanesByRoad: {},
     carUpdates: 0, firstCar: null, lastCar: null, carMovedM: 0, bevUpdates: 0, bevRoad: null,
@@ -24,7 +29,7 @@
   map.attributionControl.setPrefix('Leaflet');
   map.attributionControl.addAttribution('Map data &copy; OpenStreetMap contributors, ODbL');
   map.setView([0, 0], 2);
-  const panes = [['skeleton', 350], ['bev', 380], ['lanes', 420], ['trail', 440], ['car', 460]];
+  const panes = [['skeleton', 350], ['bev', 380], ['trail', 400], ['lanes', 420], ['car', 460]];
   for (const [name, z] of panes) map.createPane(name).style.zIndex = z;
 
   function tagTable(props) {
@@ -66,7 +71,7 @@
 
   let bevOverlay = null;
   const bevGroup = L.layerGroup().addTo(map);
-  const trail = L.polyline([], { pane: 'trail', color: '#d6336c', weight: 3, opacity: 0.85 }).addTo(map);
+  const trail = L.polyline([], { pane: 'trail', color: '#d6336c', weight: 2, opacity: 0.7, interactive: false }).addTo(map);
   let trailCount = 0;
   const carIcon = L.divIcon({
     className: 'car-icon', iconSize: [22, 22], iconAnchor: [11, 11],
@@ -102,7 +107,9 @@
       skeletonLayer.addData(g);
       stats.skeletonRoads = g.features.length;
       skeletonVersion = version;
-      if (!fitted && g.features.length) { map.fitBounds(skeletonLayer.getBounds()); fitted = true; }
+      // The whole OSM extract until the car is known (following it sets the view then).
+      if (!fitted && !followed && g.features.length) map.fitBounds(skeletonLayer.getBounds());
+      fitted = true;
     }).catch(console.error).finally(function () {
       loadingSkeleton = false;
       if (wantSkeleton !== skeletonVersion) loadSkeleton(wantSkeleton);
@@ -159,7 +166,7 @@
     bevVersion = bev.version;
     const url = 'api/bev.png?v=' + bev.version;
     if (bevOverlay) bevGroup.removeLayer(bevOverlay);
-    bevOverlay = L.imageOverlay(url, bev.bounds, { pane: 'bev', opacity: 0.8, interactive: false });
+    bevOverlay = L.imageOverlay(url, bev.bounds, { pane: 'bev', opacity: 0.9, interactive: false });
     bevGroup.addLayer(bevOverlay);
     stats.bevUpdates += 1;
     stats.bevRoad = bev.road_id;
@@ -172,6 +179,7 @@
     return Math.hypot(x, y) * R;
   }
 
+  let followed = false;
   function showCar(c) {
     if (!c) return;
     const ll = [c.lat, c.lon];
@@ -185,7 +193,7 @@
     stats.lastCar = ll;
     stats.carMovedM = metres(stats.firstCar, ll);
     if (document.getElementById('follow').checked) {
-      if (map.getZoom() < 17) map.setView(ll, 18, { animate: false });
+      if (!followed) { map.setView(ll, followZoom, { animate: false }); followed = true; }
       else map.panTo(ll, { animate: false });
     }
   }

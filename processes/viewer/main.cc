@@ -74,14 +74,15 @@ std::vector<Eigen::Vector3d> points(const polyline_t& p) {
 }
 
 // LANE_MAP (one road's lanes) as a LaneMap: one lanelet per lane, its two boundaries as line
-// strings of their own (ids above every lanelet id of the lane mapper's scheme).
+// strings of their own, with ids clear of the lane mapper's road ids ((road + 1) * 100000 + n) and
+// of the intersections' (config/intersections.yaml id_base: 1e12 + 100000 * intersection).
 map::LaneMap fromMessage(const lane_map_t& msg, const skeleton::Skeleton& sk) {
   map::LaneMap m;
   m.origin_lat = msg.origin_latitude;
   m.origin_lon = msg.origin_longitude;
   m.origin_alt = msg.origin_altitude;
   const skeleton::AtomicRoad* road = sk.road(msg.id);
-  int64_t next_line = 1'000'000'000'000LL + std::max<int64_t>(0, msg.id) * 100'000;
+  int64_t next_line = 5'000'000'000'000LL + std::max<int64_t>(0, msg.id) * 100'000;
   for (const auto& lane : msg.lanes) {
     map::Lanelet ll;
     ll.id = lane.lane_id;

@@ -178,6 +178,39 @@ TEST(ViewerState, RoadLanesAppearInGeoJsonAndLanelet2) {
   EXPECT_EQ(back.lanelets.size(), 3u);
 }
 
+TEST(ViewerState, TwoMappedRoadsThroughAnIntersectionGetConnections) {
+  auto sk = westOakland();
+  // A road into an intersection and one out of it (not its own reverse), both longer than 40 m.
+  const skeleton::AtomicRoad *in = nullptr, *out = nullptr;
+  for (const auto& a : sk->roads()) {
+    if (a.length < 40.0 || in) continue;
+    for (const auto& b : sk->roads()) {
+      if (b.from == a.to && b.id != a.reverse_id && b.length > 40.0) {
+        in = &a;
+        out = &b;
+        break;
+      }
+    }
+  }
+  ASSERT_TRUE(in && out);
+  viewer::ViewerState state(sk);
+  state.setRoadLanes(in->id, lanesAlong(*sk, *in, 1));
+  EXPECT_EQ(state.stateValue(0.0)["map"]["connections"], 0);  // one road: no intersection yet
+  state.setRoadLanes(out->id, lanesAlong(*sk, *out, 1));
+  const json s = state.stateValue(0.0);
+  EXPECT_EQ(s["map"]["road_lanes"], 2);
+  EXPECT_GE(s["map"]["connections"].get<int>(), 1);
+  int junction_polygons = 0;
+  const json g = json::parse(state.lanesGeoJson());
+  for (const auto& f : g["features"]) {
+    if (f["properties"]["feature"] == "lanelet" && f["properties"]["kind"] == "intersection") {
+      ++junction_polygons;
+      EXPECT_EQ(f["properties"]["intersection_id"], in->to);
+    }
+  }
+  EXPECT_EQ(junction_polygons, s["map"]["connections"].get<int>());
+}
+
 TEST(ViewerState, LanesInAnotherOriginAreMovedIntoTheSkeletonFrame) {
   auto sk = westOakland();
   const auto& road = longRoad(*sk);

@@ -4,8 +4,10 @@
 // viewer's page. The test listens to LANE_MAP itself and waits until the page draws the lanes of
 // the first road mapped; then it checks that the page draws exactly as many lanes for that road as
 // the LANE_MAP message has, that it shows the BEV and the OSM roads, that the car marker moved
-// along the drive, and that the status panel lists every process of the graph. It saves a
-// screenshot under build/test-artifacts/viewer_browser.png.
+// along the drive, that the status panel lists every process of the graph and that clicking a lane
+// shows its tags. It saves a screenshot under build/test-artifacts/viewer_browser.png. Then the
+// finished store is browsed with --store (no LCM): same roads and lanes, trail, both downloads.
+#include "core/io/lanelet2.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
 #include "lanemap/lane_map_t.hpp"
@@ -248,6 +250,34 @@ TEST(ViewerBrowser, PageShowsTheFirstClosedRoadsLanesTheCarAndEveryProcess) {
   browser.close();
   graph.stop();
   driver.stop();
+
+  // The finished store, browsed afterwards with no LCM (--store): the same roads and lanes as the
+  // store's files, the trail from its graph.lcmlog, and both downloads.
+  const std::string url_file = out.str("viewer.url");
+  lt::ChildProcess store_viewer({lt::binPath("lanemap-viewer"), "--store", out.str("store"), "--osm", drive + "/roads.osm",
+                                 "--port", "0", "--url-file", url_file});
+  ASSERT_TRUE(waitFor([&] { return fs::exists(url_file); }, 30)) << "the store viewer never listened";
+  std::string url;
+  std::getline(std::ifstream(url_file), url);
+  const uint16_t port = static_cast<uint16_t>(std::stoi(url.substr(url.rfind(':') + 1)));
+  const json st = json::parse(lt::responseBody(lt::httpCall(port, "GET", "/api/state")));
+  size_t road_files = 0;
+  for (const auto& e : fs::directory_iterator(out.str("store/lanes"))) road_files += e.path().extension() == ".osm";
+  EXPECT_EQ(st["map"]["roads"].get<size_t>(), road_files);
+  EXPECT_EQ(st["map"]["lanes_by_road"][road], first.second);
+  EXPECT_GT(st["trail_count"].get<int>(), 20);
+  EXPECT_FALSE(st["bev"].is_null());
+  const std::string osm = lt::httpCall(port, "GET", "/download/lane_map.osm");
+  EXPECT_EQ(lt::statusCode(osm), 200);
+  EXPECT_NE(osm.find("attachment; filename=\"lane_map.osm\""), std::string::npos);
+  { std::ofstream(out.str("download.osm")) << lt::responseBody(osm); }
+  const auto& o = skeleton.frame().origin();
+  const auto downloaded = lanemap::io::readLanelet2(out.str("download.osm"), o.lat, o.lon);
+  EXPECT_EQ(downloaded.lanelets.size(), st["map"]["road_lanes"].get<size_t>() + st["map"]["connections"].get<size_t>());
+  const std::string gj = lt::httpCall(port, "GET", "/download/lane_map.geojson");
+  EXPECT_EQ(lt::statusCode(gj), 200);
+  EXPECT_EQ(json::parse(lt::responseBody(gj))["type"], "FeatureCollection");
+  EXPECT_EQ(store_viewer.stop(), 0);
 }
 
 }  // namespace

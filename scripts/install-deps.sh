@@ -11,7 +11,11 @@ PACKAGES=(
   libgeographiclib-dev libpcl-dev libv4l-dev libosmium2-dev libprotozero-dev libbz2-dev zlib1g-dev libexpat1-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev
   osmium-tool iproute2 util-linux
+  chromium chromium-driver                # the viewer's browser test (tests/viewer/browser_test.cc)
 )
+# npm bundles the viewer's page at build time (web/viewer); a Node.js from elsewhere (NodeSource's
+# nodejs ships its own npm and conflicts with Debian's) is kept.
+if ! command -v npm > /dev/null; then PACKAGES+=(nodejs npm); fi
 if [ $# -gt 0 ]; then PACKAGES=("$@"); fi
 missing=()
 for p in "${PACKAGES[@]}"; do

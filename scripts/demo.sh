@@ -32,7 +32,9 @@ echo "== the same with the simulator's truth labels (lanemap-offline --oracle), 
 "$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/map-oracle/map.osm" --driven "$out/drive/scenario.json" --json "$out/map-oracle/eval.json"
 
 echo "== the live graph (oracle labels): lcm-logplayer at 1x -> segmenter --oracle -> road_tracker -> bev_builder"
-echo "   -> lane_mapper over LCM (lanemap-launch config/launch/demo.yaml, inside a private network namespace; about 70 s)"
+echo "   -> lane_mapper over LCM, with lanemap-viewer (lanemap-launch config/launch/demo.yaml, inside a private"
+echo "   network namespace; about 70 s). The viewer serves http://127.0.0.1:8765/ inside that namespace only"
+echo "   (the demo keeps its traffic off the host's network); browse the result afterwards with the command below."
 abs_out=$(cd "$out" && pwd)
 unshare -rn sh -c 'ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
   "$bin/lanemap-launch" config/launch/demo.yaml --all-hosts --set drive="$abs_out/drive" \
@@ -60,5 +62,7 @@ Demo output in $out/:
   live/map.osm, live/eval.json      the drive mapped by the live process graph over LCM (oracle)
   live/report.txt, graph.lcmlog     its drop counters, latency and CPU (lanemap-graph-report), and
                                     what it recorded: STATUS, ROAD_EVENT, BEV_ROAD, LANE_MAP, POSE
+Browse the live graph's map store in a web browser (no LCM, loopback only):
+  $bin/lanemap-viewer --store $out/live --osm $out/drive/roads.osm    then open http://127.0.0.1:8765/
 Map data (c) OpenStreetMap contributors, ODbL.
 EOT

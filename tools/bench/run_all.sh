@@ -41,6 +41,10 @@ echo "== segmenter: shipped model on 640x360 frames"
 echo "== live graph at real time (lcm-logplayer 1x, demo.yaml, private netns): demo drive"
 tools/bench/live_graph.sh "$build"
 
+# Issue 20: the viewer's CPU while the demo drive plays at 1x (loaded the way the page loads it).
+echo "== lanemap-viewer CPU at 1x (tools/bench/viewer_cpu.sh)"
+tools/bench/viewer_cpu.sh "$build"
+
 # Issue 16: the broad benchmark (every OSM extract in data/, truth and model labels, --driven), the
 # figure of merit for the mapping stages; about 5 minutes of one core per drive, 28 drives.
 echo "== broad map-quality benchmark (tools/bench/quality.sh)"

@@ -186,6 +186,10 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
       else if (f(bev::Layer::kDashedLine) >= o.marking_fraction) c = kDashed;
       else if (f(bev::Layer::kLaneSeparation) >= o.separation_fraction) c = kSeparation;
       else if (f(bev::Layer::kDrivable) + f(bev::Layer::kCrosswalk) + f(bev::Layer::kStopLine) >= o.drivable_fraction) c = kDrivable;
+      // Seen drivable often enough, whatever else it was labelled: the lane classes are relative to
+      // the ego lane, and frames taken inside a junction (no ego lane) label the roads around it
+      // background; on a short road after a turn most views are such frames.
+      else if (o.drivable_min_count > 0 && layer(t, idx, bev::Layer::kDrivable) >= o.drivable_min_count) c = kDrivable;
       else c = kBlocked;
       r.code[static_cast<size_t>(i) * r.nd + j] = c;
     }
@@ -385,6 +389,7 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
 
   auto t0 = Clock::now();
   const Raster R = buildRaster(grid, *frame, road, o);
+  for (uint8_t c : R.code) ++res.stats.raster_cells[c];
   res.stats.raster_s = since(t0);
   t0 = Clock::now();
 

@@ -31,6 +31,8 @@
 
 #include <Eigen/Core>
 
+#include <array>
+
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -80,6 +82,9 @@ struct ExplorationStats {
   int64_t particle_steps = 0;  // particles moved and tested
   int64_t deaths = 0;
   int tracks = 0;              // lane tracks before dropping short ones
+  // Cells of the straightened raster per class: unobserved, drivable, blocked, separation, dashed,
+  // solid, curb, outside (our direction's carriageway ends there).
+  std::array<int64_t, 8> raster_cells{};
   double raster_s = 0.0, filter_s = 0.0, fit_s = 0.0;  // seconds
 };
 

@@ -39,6 +39,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const YAML::Node& n) {
   read(n, "marking_fraction", o.marking_fraction, k);
   read(n, "separation_fraction", o.separation_fraction, k);
   read(n, "drivable_fraction", o.drivable_fraction, k);
+  read(n, "drivable_min_count", o.drivable_min_count, k);
   read(n, "min_observations", o.min_observations, k);
   read(n, "corridor_half_width_m", o.corridor_half_width_m, k);
   read(n, "frame_spacing_m", o.frame_spacing_m, k);
@@ -89,6 +90,7 @@ void ExplorerOptions::validate() const {
   need(marking_fraction > 0 && marking_fraction <= 1, "marking_fraction in (0, 1]");
   need(separation_fraction > 0 && separation_fraction <= 1, "separation_fraction in (0, 1]");
   need(drivable_fraction >= 0 && drivable_fraction <= 1, "drivable_fraction in [0, 1]");
+  need(drivable_min_count >= 0, "drivable_min_count >= 0");
   need(min_observations >= 1, "min_observations >= 1");
   need(corridor_half_width_m > footprint_width_m && corridor_half_width_m <= 60, "corridor_half_width_m");
   need(frame_spacing_m > 0.05 && frame_spacing_m <= 5, "frame_spacing_m in (0.05, 5]");

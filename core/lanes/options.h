@@ -33,6 +33,8 @@ struct ExplorerOptions {
   double marking_fraction = 0.3;
   double separation_fraction = 0.3;
   double drivable_fraction = 0.5;
+  int drivable_min_count = 1;            // ... unless seen drivable this often (0: off): a junction's
+                                         //   frames label the roads around it background
   int min_observations = 1;
 
   // --- the road's corridor in its Frenet frame (d > 0 left of the driving direction) ---

@@ -110,8 +110,9 @@ Report run(const Scenario& sc, uint64_t seed = 1, ExplorerOptions opt = {}) {
                 map::toString(lane.right.type));
   }
   const auto& st = rep.result.stats;
-  std::printf("  %d steps, %d births, %d tracks, raster %.3f s, filter %.3f s, fit %.3f s\n", st.steps, st.births, st.tracks,
-              st.raster_s, st.filter_s, st.fit_s);
+  std::printf("  %d steps, %d births, %d tracks, raster %.3f s, filter %.3f s, fit %.3f s; cells drivable %lld blocked %lld\n",
+              st.steps, st.births, st.tracks, st.raster_s, st.filter_s, st.fit_s,
+              static_cast<long long>(st.raster_cells[1]), static_cast<long long>(st.raster_cells[2]));
   return rep;
 }
 
@@ -365,6 +366,21 @@ TEST(Explorer, NoLaneMadeOfAWideShoulder) {
   sc.layout.areas[0].dlo = constant(-3.45);
   const Report rep = run(sc);
   expectLanes(rep, sc);
+}
+
+// A road seen mostly from inside the junctions at its ends: the lane classes are relative to the
+// ego lane, and a frame taken where there is none (a junction) labels the road background, so
+// only a third of each cell's observations say drivable. Seen drivable that often, it is drivable.
+TEST(Explorer, RoadSeenMostlyFromTheJunctions) {
+  Scenario sc = straightLanes({3.5, 3.4}, 120.0);
+  sc.layout.drivable_share = 0.4;  // ~4 of ~10 observations drivable
+  const Report rep = run(sc);
+  expectLanes(rep, sc);
+  EXPECT_EQ(rep.result.stats.raster_cells[2], 0) << "no cell of the road is blocked";
+  ExplorerOptions off;
+  off.drivable_min_count = 0;
+  off.unnamed_lanes = false;  // (which would find these painted lanes too, but not an unpainted road)
+  EXPECT_EQ(run(sc, 1, off).result.lanes.size(), 0u) << "by the drivable fraction alone the road is blocked";
 }
 
 // A road first seen 20 m in (the car turned into it: the camera saw nothing of its first 20 m).

@@ -78,6 +78,8 @@ struct Layout {
   std::vector<Box> boxes;
   double observed_half_width = 14.0;
   double observed_s0 = -1e9;  // nothing observed before this s (a road first seen this far in)
+  double drivable_share = 1.0;  // of a drivable cell's observations, the share labelled drivable
+                                // (the rest: background, as frames taken inside a junction label it)
   uint64_t seed = 3;
 };
 
@@ -124,7 +126,10 @@ inline bev::BevGrid paint(const Layout& L) {
       if (marked) continue;
       bool drivable = false;
       for (const Area& a : L.areas) drivable |= s >= a.s0 && s <= a.s1 && d >= a.dlo(s) && d <= a.dhi(s);
-      if (drivable) g.add(cell, bev::Layer::kDrivable, obs - static_cast<int>(U(rng) * 3));  // a few misses
+      if (drivable) {
+        const int seen = static_cast<int>(std::lround(obs * L.drivable_share));
+        g.add(cell, bev::Layer::kDrivable, std::max(0, seen - static_cast<int>(U(rng) * 3)));  // a few misses
+      }
       // Segmentation noise: a rare spurious marking count, well below the thresholds.
       if (U(rng) < 0.02) g.add(cell, bev::Layer::kDashedLine, 1);
     }

@@ -109,8 +109,12 @@ void benchFrames(int frames) {
   auto poseAt = [&](double t) { return traj.at(t).vehicle_to_enu; };
   std::printf("camera %dx%d: %zu candidate pixels within 30 m, %zu on the projection lattice\n", cam.width(),
               cam.height(), projector.candidatePixels(), projector.latticePixels());
-  double t_flat = 0, t_mesh = 0, t_cast = 0, t_warp = 0, t_dec = 0, t_ext = 0, t_tri = 0, t_idx = 0, t_ground = 0;
-  size_t points = 0, ground = 0, tris = 0, cells_flat = 0, cells_mesh = 0, cells_cast = 0, cells_differ = 0;
+  double t_flat = 0, t_mesh = 0, t_mesh_full = 0, t_cast = 0, t_warp = 0, t_dec = 0, t_ext = 0, t_tri = 0, t_idx = 0,
+         t_ground = 0, t_ground_full = 0;
+  size_t points = 0, ground = 0, mesh_points = 0, tris = 0, tris_full = 0, cells_flat = 0, cells_mesh = 0,
+         cells_mesh_full = 0, cells_cast = 0, cells_differ = 0;
+  ground::SweepGroundOptions full_options;  // every ground point a vertex (before decimation)
+  full_options.decimate_m = 0.0;
   int n = 0;
   for (double t = 2.0; n < frames && t < traj.duration() - 1.0; t += (traj.duration() - 3.0) / frames, ++n) {
     const auto st = traj.at(t);
@@ -124,12 +128,17 @@ void benchFrames(int frames) {
     c0 = cpuMs();
     const auto g = ground::buildSweepGround(*pts);
     t_ground += cpuMs() - c0;
+    c0 = cpuMs();
+    const auto g_full = ground::buildSweepGround(*pts, full_options);
+    t_ground_full += cpuMs() - c0;
     t_ext += g.ms_extract;
     t_tri += g.ms_triangulate;
     t_idx += g.ms_index;
     points += g.points;
     ground += g.ground_points;
+    mesh_points += g.mesh_points;
     tris += g.mesh->triangleCount();
+    tris_full += g_full.mesh->triangleCount();
     c0 = cpuMs();
     cells_flat += projector.project(labels, st.vehicle_to_enu).cells.size();
     t_flat += cpuMs() - c0;
@@ -137,14 +146,18 @@ void benchFrames(int frames) {
     const auto m = projector.project(labels, st.vehicle_to_enu, g.mesh.get());
     t_mesh += cpuMs() - c0;
     c0 = cpuMs();
-    const auto r = caster.project(labels, st.vehicle_to_enu, g.mesh.get());
+    const auto mf = projector.project(labels, st.vehicle_to_enu, g_full.mesh.get());
+    t_mesh_full += cpuMs() - c0;
+    c0 = cpuMs();
+    const auto r = caster.project(labels, st.vehicle_to_enu, g_full.mesh.get());
     t_cast += cpuMs() - c0;
     cells_mesh += m.cells.size();
+    cells_mesh_full += mf.cells.size();
     cells_cast += r.cells.size();
     {
       size_t i = 0, j = 0, same = 0;  // both sorted by (y, x)
-      while (i < m.cells.size() && j < r.cells.size()) {
-        const auto& a = m.cells[i];
+      while (i < mf.cells.size() && j < r.cells.size()) {
+        const auto& a = mf.cells[i];
         const auto& b = r.cells[j];
         if (a.y == b.y && a.x == b.x) {
           same += a.layers == b.layers;
@@ -155,7 +168,7 @@ void benchFrames(int frames) {
           ++j;
         }
       }
-      cells_differ += m.cells.size() + r.cells.size() - 2 * same;
+      cells_differ += mf.cells.size() + r.cells.size() - 2 * same;
     }
     cv::Mat ipm;
     const int threads = cv::getNumThreads();
@@ -168,18 +181,23 @@ void benchFrames(int frames) {
   std::printf("per frame (%d frames, %dx%d labels, CPU ms of 1 thread):\n", n, cam.width(), cam.height());
   std::printf("  flat projection   %7.2f ms  (%zu cells)   %5.1fx warpPerspective   [baseline of the mesh rows]\n",
               t_flat / n, cells_flat / n, t_flat / t_warp);
-  std::printf("  mesh projection   %7.2f ms  (%zu cells)   %5.1fx warpPerspective, %.2fx flat (target <= 2x)  [raster]\n",
+  std::printf("  mesh projection   %7.2f ms  (%zu cells)   %5.1fx warpPerspective, %.2fx flat (target <= 2x)"
+              "  [raster, decimated mesh: the default]\n",
               t_mesh / n, cells_mesh / n, t_mesh / t_warp, t_mesh / t_flat);
-  std::printf("  mesh, ray cast    %7.2f ms  (%zu cells)   %5.1fx warpPerspective, %.2fx flat  [per-pixel ray cast, before]\n",
-              t_cast / n, cells_cast / n, t_cast / t_warp, t_cast / t_flat);
-  std::printf("  raster vs ray cast: %.3f %% of the cells differ (cell or layers)\n",
+  std::printf("  mesh, full mesh   %7.2f ms  (%zu cells)   %5.1fx warpPerspective, %.2fx flat  [raster, every ground point]\n",
+              t_mesh_full / n, cells_mesh_full / n, t_mesh_full / t_warp, t_mesh_full / t_flat);
+  std::printf("  mesh, ray cast    %7.2f ms  (%zu cells)   %5.1fx warpPerspective, %.2fx flat  [per-pixel ray cast, full"
+              " mesh: before]\n", t_cast / n, cells_cast / n, t_cast / t_warp, t_cast / t_flat);
+  std::printf("  raster vs ray cast on the full mesh: %.3f %% of the cells differ (cell or layers)\n",
               100.0 * cells_differ / std::max<size_t>(1, cells_cast));
   std::printf("  warpPerspective   %7.2f ms  (flat IPM, 300x300 BEV of 30 x 30 m, nearest, pinhole only)\n", t_warp / n);
-  std::printf("per sweep: %zu points, %zu ground, %zu triangles\n", points / n, ground / n, tris / n);
+  std::printf("per sweep: %zu points, %zu ground, %zu mesh vertices (decimate_m %.2f), %zu triangles (%zu without"
+              " decimation)\n", points / n, ground / n, mesh_points / n, ground::SweepGroundOptions{}.decimate_m, tris / n,
+              tris_full / n);
   std::printf("  decode + ENU      %7.2f ms\n  ground extraction %7.2f ms (wall)\n  Delaunay (CGAL)   %7.2f ms (wall)\n"
               "  triangle index    %7.2f ms (wall)\n  mesh total        %7.2f ms CPU (%.2f ms wall; target <= 5 ms;"
-              " worker thread in lanemap-bev-builder)\n",
-              t_dec / n, t_ext / n, t_tri / n, t_idx / n, t_ground / n, (t_ext + t_tri + t_idx) / n);
+              " worker thread in lanemap-bev-builder)\n  mesh, no decimation %5.2f ms CPU  [before]\n",
+              t_dec / n, t_ext / n, t_tri / n, t_idx / n, t_ground / n, (t_ext + t_tri + t_idx) / n, t_ground_full / n);
 }
 
 void benchMemory(double duration_s) {

@@ -166,7 +166,7 @@ class BevBuilder {
   int64_t newest_sweep_end_ = 0;  // last packet time of the newest sweep received
   bool finishing_ = false;
 
-  mutable std::mutex mutex_;  // guards stats_ mesh fields, mesh_, work_
+  mutable std::mutex mutex_;  // guards everything here (the worker takes it to pick work and publish)
   std::condition_variable cv_;
   BevBuilderStats stats_;
   std::deque<std::shared_ptr<const ground::SweepGround>> meshes_;  // finished, oldest first

@@ -39,13 +39,15 @@
 //   in front of the camera exactly when a, b, c >= 0, at camera depth 1 / (a + b + c). Perspective
 //   maps the triangle's edges to straight lines in (x, y), so this test is exact under distortion
 //   (it runs on the undistorted coordinates of the real pixels) and needs no clipping for
-//   triangles reaching behind the camera. Each triangle visits the pixels of the kept rows inside
-//   its (x, y) bounding box (a per-row lookup table gives the first column) and keeps, per pixel,
-//   the nearest triangle (a z-buffer of inverse depth). The pixel's hit is then the ray/triangle
-//   intersection of that triangle, in double, as the ray cast computes it; a pixel whose z-buffer
-//   triangle the double test rejects (float rounding at an edge) is ray-cast. So the cells are
-//   those of the ray cast up to rounding at triangle edges (tests/bev/mesh_raster_test.cc).
-//   mesh_raster = false casts every ray (the reference).
+//   triangles reaching behind the camera. Each triangle visits the lattice pixels of the kept rows
+//   inside its exact x span on each row (a per-row lookup table gives the first one) and keeps, per
+//   pixel, the nearest triangle (a z-buffer of inverse depth). The pixel's hit is then the ray's
+//   intersection with that triangle's plane, in double. A separation pixel off the lattice takes
+//   the nearer of its two lattice neighbours' triangles that its own ray meets, and is ray-cast
+//   when neither does. So the cells are those of the ray cast up to float rounding at triangle
+//   edges (tests/bev/mesh_raster_test.cc: 0 to 0.007 % of the cells differ). mesh_raster = false
+//   casts every ray (the reference). lanemap-bench-bev: 24x the flat projection before, 2.0x now
+//   with the decimated mesh (core/ground/sweep_ground.h), 2.7x on the full mesh.
 #pragma once
 
 #include "core/bev/bev_grid.h"

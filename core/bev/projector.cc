@@ -435,6 +435,7 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
   const Eigen::Matrix3d rot = vehicle_to_enu.linear();
   const int w = camera_.width();
   const bool use_raster = mesh && rasterises();
+  const double range2 = options_.max_range_m * options_.max_range_m;
   MeshRaster mr;
   if (use_raster) rasterise(*mesh, vehicle_to_enu, mr);
   const Eigen::Matrix3f r_cv = camera_.vehicleToCamera().linear().cast<float>();
@@ -443,7 +444,9 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
     Eigen::Vector3d p = vehicle_to_enu * ray.flat_hit.cast<double>();
     if (mesh) {
       const Eigen::Vector3d d = rot * ray.dir.cast<double>();
-      const double max_t = options_.max_range_m / std::max(d.head<2>().norm(), 1e-9);
+      // Range limit on t: horizontal distance t |d_xy| <= max_range_m (squared here; the ray cast
+      // below takes it as max_t).
+      const double dxy2 = d.x() * d.x() + d.y() * d.y();
       std::optional<double> t;
       bool settled = false;
       if (use_raster) {
@@ -478,12 +481,12 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
           const double h = vt.nd / vt.n.dot(d);
           if (h > 0.0 && std::isfinite(h)) {
             settled = true;
-            if (h <= max_t) t = h;  // the nearest hit; beyond max_t every hit is
+            if (h * h * dxy2 <= range2) t = h;  // the nearest hit; beyond range every hit is
           }
         }
       }
       if (!settled) {
-        t = mesh->intersect(c, d, max_t);
+        t = mesh->intersect(c, d, options_.max_range_m / std::max(std::sqrt(dxy2), 1e-9));
         ++splat.raycast;
       }
       if (t) {

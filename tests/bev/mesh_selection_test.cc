@@ -63,13 +63,14 @@ Scenario scenario(double end_s, double sweeps_end_s) {
   s.sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(osm));
   sim::WorldOptions wo = sim::WorldOptions::fromYamlFile(kSource + "/config/sim_world.yaml");
   wo.seed = 9;
-  static std::unique_ptr<sim::SimWorld> world;  // kept: the trajectory refers to it
+  static std::unique_ptr<sim::SimWorld> world;  // kept with the trajectory, which refers to it
+  static std::unique_ptr<sim::Trajectory> traj;
+  traj.reset();
   world = sim::buildWorld(*s.sk, wo);
   sim::DriveOptions drive;
   drive.seed = 9;
   drive.duration_s = end_s + 2.0;
   const auto plan = sim::planDrive(*s.sk, world->truth(), drive);
-  static std::unique_ptr<sim::Trajectory> traj;
   traj = std::make_unique<sim::Trajectory>(world->truth(), *world, plan, drive);
   const YAML::Node vehicle = loadYamlFile(kSource + "/config/vehicle.yaml");
   s.camera = std::make_unique<camera::CameraModel>(camera::CameraModel::fromYaml(vehicle["camera"]));

@@ -166,9 +166,15 @@ void BevBuilder::drainFrames() {
     const auto r = poses_.lookup(f.utime, &pose);
     if (r == PoseBuffer::Lookup::kTooNew || r == PoseBuffer::Lookup::kEmpty) return;
     if (r == PoseBuffer::Lookup::kOk) {
-      switch (meshWait(f.utime)) {
+      const int64_t utime = f.utime;
+      switch (meshWait(utime)) {
         case MeshWait::kNo: break;
-        case MeshWait::kMeshInFlight: return;  // the worker (or the next pose) brings it
+        case MeshWait::kSweepNeedsPoses: return;  // the next pose decodes it
+        case MeshWait::kMeshInWorker:
+          // Releases mutex_ while the worker finishes (it publishes under mutex_), then looks again.
+          cv_.wait(mutex_, [&] { return stop_ || meshWait(utime) != MeshWait::kMeshInWorker; });
+          if (stop_) return;
+          continue;
         case MeshWait::kSweepToCome:
           if (static_cast<double>(poses_.newest() - f.utime) < options_.mesh_wait_s * 1e6) return;
           ++stats_.frames_mesh_wait_expired;
@@ -187,18 +193,20 @@ void BevBuilder::drainFrames() {
 BevBuilder::MeshWait BevBuilder::meshWait(int64_t utime) const {
   if (!options_.use_lidar || finishing_ || newest_sweep_end_ == 0) return MeshWait::kNo;
   if (newest_sweep_end_ < utime - 1000000) return MeshWait::kNo;  // no sweep for a second: no LIDAR now
-  const double age = options_.max_mesh_age_s * 1e6;
-  auto near = [&](int64_t mid) { return std::abs(static_cast<double>(mid - utime)) <= age; };
+  // Only a sweep that may be nearer than the nearest finished mesh is worth waiting for.
+  double best = options_.max_mesh_age_s * 1e6;
+  for (const auto& m : meshes_) best = std::min(best, std::abs(static_cast<double>(m->utime - utime)));
+  auto near = [&](int64_t mid) { return std::abs(static_cast<double>(mid - utime)) < best; };
   // A sweep waiting for its poses is decoded as soon as the poses pass its last packet.
   if (pending_sweep_ && near(pending_sweep_->packet_utime.front() +
                              (pending_sweep_->packet_utime.back() - pending_sweep_->packet_utime.front()) / 2)) {
-    return MeshWait::kMeshInFlight;
+    return MeshWait::kSweepNeedsPoses;
   }
   for (const auto& w : work_) {
-    if (near(w.utime_mid)) return MeshWait::kMeshInFlight;
+    if (near(w.utime_mid)) return MeshWait::kMeshInWorker;
   }
-  if (working_ && near(working_utime_)) return MeshWait::kMeshInFlight;
-  return newest_sweep_end_ < utime ? MeshWait::kSweepToCome : MeshWait::kNo;
+  if (working_ && near(working_utime_)) return MeshWait::kMeshInWorker;
+  return newest_sweep_end_ + 5000 < utime ? MeshWait::kSweepToCome : MeshWait::kNo;
 }
 
 void BevBuilder::project(int64_t utime, const cv::Mat& labels, const Eigen::Isometry3d& pose) {

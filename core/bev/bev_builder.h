@@ -22,9 +22,12 @@
 //   every sweep near its time that came in has its mesh: once a sweep ending at or after the frame's
 //   time is in, no later sweep can be nearer. Waiting for the sweep to come ends anyway when the
 //   poses are mesh_wait_s past the frame (counted: frames_mesh_wait_expired; a LIDAR that stalls);
-//   there is none when no sweep has come for a second (no LIDAR) or at finish(). It costs the live
-//   graph up to one sweep (0.1 s) after the frame's time plus a mesh (a few ms), less the
-//   segmenter's own latency, which usually covers it.
+//   there is none when no sweep has come for a second (no LIDAR) or at finish(); a frame at most
+//   5 ms past the newest sweep's end counts as covered (the gap between two sweeps: the next one
+//   could be nearer by those ms only). When the sweep a frame waits for is in the worker, the
+//   caller's thread waits for the worker (one mesh, a few ms) rather than leave the frame for a
+//   later message that may not come. It costs the live graph up to one sweep (0.1 s) after the
+//   frame's time plus a mesh, less the segmenter's own latency, which usually covers it.
 // - Roads: ROAD_EVENT "entered" opens a RoadBev (road_bev.h); "reached intersection" closes it
 //   once the poses are close_delay_s past the event (frames still waiting for their pose then go in
 //   first), and the grid is handed over through takeClosed(). "Left map" / "pose lost" discard the
@@ -141,9 +144,10 @@ class BevBuilder {
   };
   void drainFrames();
   // Whether a frame at utime must still wait for a mesh nearer its time (see the header comment):
-  // no; the sweep covering it is still to come (waits at most mesh_wait_s); a sweep near it is
-  // being meshed (waits: the worker finishes it).
-  enum class MeshWait { kNo, kSweepToCome, kMeshInFlight };
+  // no; the sweep covering it is still to come (waits at most mesh_wait_s); a sweep near it waits
+  // for its poses (the next pose decodes it); a sweep near it is in the worker (the caller waits
+  // for the worker: a few ms, so that a frame is never left waiting after the last message).
+  enum class MeshWait { kNo, kSweepToCome, kSweepNeedsPoses, kMeshInWorker };
   MeshWait meshWait(int64_t utime) const;
   void project(int64_t utime, const cv::Mat& labels, const Eigen::Isometry3d& pose);
   void tryPendingSweep();
@@ -167,7 +171,7 @@ class BevBuilder {
   bool finishing_ = false;
 
   mutable std::mutex mutex_;  // guards everything here (the worker takes it to pick work and publish)
-  std::condition_variable cv_;
+  std::condition_variable_any cv_;  // also waited on with mutex_ itself (drainFrames)
   BevBuilderStats stats_;
   std::deque<std::shared_ptr<const ground::SweepGround>> meshes_;  // finished, oldest first
   std::deque<ground::SweepPoints> work_;                          // waiting for the worker

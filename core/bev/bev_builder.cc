@@ -44,6 +44,7 @@ BevBuilderOptions BevBuilderOptions::fromYaml(const YAML::Node& n) {
   read(p, "sample_spacing_m", o.projector.sample_spacing_m);
   read(p, "lane_separation", o.projector.lane_separation);
   read(p, "max_separation_gap_m", o.projector.max_separation_gap_m);
+  read(p, "mesh_raster", o.projector.mesh_raster);
   read(n["corridor"], "half_width_m", o.accumulator.corridor.half_width_m);
   read(n["corridor"], "mask_cell_m", o.accumulator.corridor.mask_cell_m);
   read(n["corridor"], "include_rois", o.accumulator.corridor.include_rois);
@@ -52,8 +53,11 @@ BevBuilderOptions BevBuilderOptions::fromYaml(const YAML::Node& n) {
   read(l, "enabled", o.use_lidar);
   read(l, "async", o.async_mesh);
   read(l, "max_mesh_age_s", o.max_mesh_age_s);
+  read(l, "mesh_wait_s", o.mesh_wait_s);
+  read(l, "mesh_history_s", o.mesh_history_s);
   read(l, "max_edge_m", o.ground.max_edge_m);
   read(l, "max_range_m", o.ground.max_range_m);
+  read(l, "decimate_m", o.ground.decimate_m);
   read(l, "index_cell_m", o.ground.index.cell_m);
   if (l) readGround(l["ground"], o.ground.extraction);
   read(n["poses"], "keep_s", o.pose_keep_s);
@@ -115,8 +119,8 @@ void BevBuilder::addPose(const TimedPose& pose) {
     ++stats_.poses_out_of_order;
     return;
   }
+  tryPendingSweep();  // first: a frame may be waiting for this sweep's mesh
   drainFrames();
-  tryPendingSweep();
   finishCloses(false);
 }
 
@@ -162,6 +166,20 @@ void BevBuilder::drainFrames() {
     const auto r = poses_.lookup(f.utime, &pose);
     if (r == PoseBuffer::Lookup::kTooNew || r == PoseBuffer::Lookup::kEmpty) return;
     if (r == PoseBuffer::Lookup::kOk) {
+      const int64_t utime = f.utime;
+      switch (meshWait(utime)) {
+        case MeshWait::kNo: break;
+        case MeshWait::kSweepNeedsPoses: return;  // the next pose decodes it
+        case MeshWait::kMeshInWorker:
+          // Releases mutex_ while the worker finishes (it publishes under mutex_), then looks again.
+          cv_.wait(mutex_, [&] { return stop_ || meshWait(utime) != MeshWait::kMeshInWorker; });
+          if (stop_) return;
+          continue;
+        case MeshWait::kSweepToCome:
+          if (static_cast<double>(poses_.newest() - f.utime) < options_.mesh_wait_s * 1e6) return;
+          ++stats_.frames_mesh_wait_expired;
+          break;
+      }
       project(f.utime, f.labels, pose);
     } else if (r == PoseBuffer::Lookup::kTooOld) {
       ++stats_.frames_late;
@@ -172,11 +190,39 @@ void BevBuilder::drainFrames() {
   }
 }
 
+BevBuilder::MeshWait BevBuilder::meshWait(int64_t utime) const {
+  if (!options_.use_lidar || finishing_ || newest_sweep_end_ == 0) return MeshWait::kNo;
+  if (newest_sweep_end_ < utime - 1000000) return MeshWait::kNo;  // no sweep for a second: no LIDAR now
+  // Only a sweep that may be nearer than the nearest finished mesh is worth waiting for.
+  double best = options_.max_mesh_age_s * 1e6;
+  for (const auto& m : meshes_) best = std::min(best, std::abs(static_cast<double>(m->utime - utime)));
+  auto near = [&](int64_t mid) { return std::abs(static_cast<double>(mid - utime)) < best; };
+  // A sweep waiting for its poses is decoded as soon as the poses pass its last packet.
+  if (pending_sweep_ && near(pending_sweep_->packet_utime.front() +
+                             (pending_sweep_->packet_utime.back() - pending_sweep_->packet_utime.front()) / 2)) {
+    return MeshWait::kSweepNeedsPoses;
+  }
+  for (const auto& w : work_) {
+    if (near(w.utime_mid)) return MeshWait::kMeshInWorker;
+  }
+  if (working_ && near(working_utime_)) return MeshWait::kMeshInWorker;
+  return newest_sweep_end_ + 5000 < utime ? MeshWait::kSweepToCome : MeshWait::kNo;
+}
+
 void BevBuilder::project(int64_t utime, const cv::Mat& labels, const Eigen::Isometry3d& pose) {
   const auto t0 = std::chrono::steady_clock::now();
-  std::shared_ptr<const ground::SweepGround> mesh = mesh_;
-  const bool use_mesh = mesh && mesh->mesh &&
-                        std::abs(static_cast<double>(utime - mesh->utime)) <= options_.max_mesh_age_s * 1e6;
+  // The mesh of the sweep nearest in time (the earlier on a tie), within max_mesh_age_s.
+  std::shared_ptr<const ground::SweepGround> mesh;
+  double best = options_.max_mesh_age_s * 1e6;
+  for (const auto& m : meshes_) {
+    const double d = std::abs(static_cast<double>(m->utime - utime));
+    if (m->mesh && (d < best || (!mesh && d <= best))) {
+      best = d;
+      mesh = m;
+    }
+  }
+  const bool use_mesh = mesh != nullptr;
+  if (on_mesh_choice_) on_mesh_choice_(utime, use_mesh ? mesh->utime : 0);
   FrameSplat splat = projector_.project(labels, pose, use_mesh ? mesh->mesh.get() : nullptr);
   splat.utime = utime;
   accumulator_.add(splat);
@@ -197,8 +243,10 @@ void BevBuilder::addSweep(SweepData sweep) {
     return;
   }
   if (pending_sweep_) ++stats_.sweeps_no_pose;  // the older one never got its poses
+  newest_sweep_end_ = std::max(newest_sweep_end_, sweep.packet_utime.back());
   pending_sweep_ = std::move(sweep);
   tryPendingSweep();
+  drainFrames();  // a frame may have waited for this sweep (one without a mesh to come)
 }
 
 // Decodes the waiting sweep once the poses cover its last packet; builds (or queues) its mesh.
@@ -219,8 +267,11 @@ void BevBuilder::tryPendingSweep() {
     buildMesh(*points);
     return;
   }
-  if (work_) ++stats_.sweeps_replaced;
-  work_ = std::move(*points);
+  if (work_.size() >= 4) {
+    work_.pop_front();
+    ++stats_.sweeps_replaced;
+  }
+  work_.push_back(std::move(*points));
   cv_.notify_all();
 }
 
@@ -230,7 +281,11 @@ void BevBuilder::buildMesh(const ground::SweepPoints& points) {
   auto g = std::make_shared<const ground::SweepGround>(ground::buildSweepGround(points, options_.ground));
   const double ms = msSince(t0);
   auto publish = [&] {
-    mesh_ = g;
+    meshes_.push_back(g);
+    while (meshes_.size() > 1 &&
+           static_cast<double>(g->utime - meshes_.front()->utime) > options_.mesh_history_s * 1e6) {
+      meshes_.pop_front();
+    }
     ++stats_.sweeps_meshed;
     stats_.mesh_ms_sum += ms;
     stats_.mesh_ms_max = std::max(stats_.mesh_ms_max, ms);
@@ -250,11 +305,12 @@ void BevBuilder::workerLoop() {
       std::unique_lock<std::mutex> lock(mutex_);
       working_ = false;
       cv_.notify_all();
-      cv_.wait(lock, [this] { return stop_ || work_.has_value(); });
+      cv_.wait(lock, [this] { return stop_ || !work_.empty(); });
       if (stop_) return;
-      points = std::move(*work_);
-      work_.reset();
+      points = std::move(work_.front());
+      work_.pop_front();
       working_ = true;
+      working_utime_ = points.utime_mid;
     }
     buildMesh(points);
   }
@@ -310,7 +366,8 @@ void BevBuilder::finishCloses(bool all) {
 void BevBuilder::finish() {
   {
     std::unique_lock<std::mutex> lock(mutex_);
-    cv_.wait(lock, [this] { return !worker_.joinable() || (!work_ && !working_); });
+    cv_.wait(lock, [this] { return !worker_.joinable() || (work_.empty() && !working_); });
+    finishing_ = true;  // no more input: nothing to wait for
     drainFrames();
     finishCloses(true);
   }
@@ -340,7 +397,12 @@ void BevBuilder::setProjectedCallback(std::function<void(int64_t frame_utime)> c
 
 std::shared_ptr<const ground::SweepGround> BevBuilder::latestMesh() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return mesh_;
+  return meshes_.empty() ? nullptr : meshes_.back();
+}
+
+void BevBuilder::setMeshChoiceCallback(std::function<void(int64_t frame_utime, int64_t mesh_utime)> callback) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  on_mesh_choice_ = std::move(callback);
 }
 
 }  // namespace lanemap::bev

@@ -12,12 +12,22 @@
 //   to ENU in the caller's thread (a few ms), and its ground mesh (extraction + Delaunay + index,
 //   tens of ms) is built either in the caller's thread (async_mesh = false: deterministic, tests)
 //   or in a worker thread (async_mesh = true, the process): the LCM thread then never waits for a
-//   mesh, a sweep arriving while the worker is busy replaces the waiting one (counted), and frames
-//   use the newest finished mesh. A frame uses the mesh when it is at most max_mesh_age_s from the
-//   frame's time: the mesh is in ENU and the world is static, so a mesh from the previous sweep
-//   (0.1 s, ~1 m of driving earlier) still covers what the camera sees; older, or none: the flat
-//   plane. The sweep covering the frame's own time ends after the frame, so waiting for it would
-//   delay every frame by up to a sweep for no gain.
+//   mesh; sweeps queue for the worker in order (at most 4 waiting; beyond, the oldest is dropped,
+//   counted as sweeps_replaced).
+// - Which mesh a frame uses is decided by time, not by what happens to be finished: the mesh of the
+//   sweep whose middle is nearest to the frame's time, if within max_mesh_age_s (the mesh is in
+//   ENU and the world is static, so a neighbouring sweep's mesh covers what the camera sees); else
+//   the flat plane. So that the choice does not depend on CPU load, a frame waits (in the pending
+//   queue, like a frame waiting for its pose) until the sweep covering its time has come in and
+//   every sweep near its time that came in has its mesh: once a sweep ending at or after the frame's
+//   time is in, no later sweep can be nearer. Waiting for the sweep to come ends anyway when the
+//   poses are mesh_wait_s past the frame (counted: frames_mesh_wait_expired; a LIDAR that stalls);
+//   there is none when no sweep has come for a second (no LIDAR) or at finish(); a frame at most
+//   5 ms past the newest sweep's end counts as covered (the gap between two sweeps: the next one
+//   could be nearer by those ms only). When the sweep a frame waits for is in the worker, the
+//   caller's thread waits for the worker (one mesh, a few ms) rather than leave the frame for a
+//   later message that may not come. It costs the live graph up to one sweep (0.1 s) after the
+//   frame's time plus a mesh, less the segmenter's own latency, which usually covers it.
 // - Roads: ROAD_EVENT "entered" opens a RoadBev (road_bev.h); "reached intersection" closes it
 //   once the poses are close_delay_s past the event (frames still waiting for their pose then go in
 //   first), and the grid is handed over through takeClosed(). "Left map" / "pose lost" discard the
@@ -56,6 +66,8 @@ struct BevBuilderOptions {
   bool use_lidar = true;           // false: flat ground only
   bool async_mesh = true;          // build meshes in a worker thread
   double max_mesh_age_s = 0.5;     // a frame uses a mesh at most this far from its time
+  double mesh_wait_s = 0.3;        // a frame waits at most this long (pose time) for its nearest mesh
+  double mesh_history_s = 2.0;     // finished meshes kept for late frames
   double pose_keep_s = 10.0;       // pose history
   double max_pose_gap_s = 0.25;    // two poses further apart do not interpolate
   size_t max_pending_frames = 30;  // frames waiting for a later pose (3 s at 10 Hz)
@@ -73,6 +85,7 @@ struct BevBuilderStats {
   int64_t frames_out_of_order = 0, frames_late = 0, frames_no_pose = 0, frames_queue_full = 0;
   int64_t poses_received = 0, poses_invalid = 0, poses_out_of_order = 0;
   int64_t sweeps_received = 0, sweeps_meshed = 0, sweeps_no_pose = 0, sweeps_replaced = 0, sweeps_empty = 0;
+  int64_t frames_mesh_wait_expired = 0;  // projected without waiting any longer for a nearer mesh
   int64_t roads_opened = 0, roads_closed = 0, roads_discarded = 0, events_unknown_road = 0;
   double project_ms_max = 0.0, project_ms_sum = 0.0;  // per projected frame
   double mesh_ms_max = 0.0, mesh_ms_sum = 0.0;        // per mesh (extraction + Delaunay + index)
@@ -117,6 +130,9 @@ class BevBuilder {
   // fed the builder (inside addPose/addFrame/finish) with the builder's lock held: the callback must
   // not call the builder. lanemap-bev-builder measures its frame-to-BEV latency with it.
   void setProjectedCallback(std::function<void(int64_t frame_utime)> callback);
+  // Called (same thread and lock rule) with each projected frame's utime and the utime (sweep
+  // middle) of the mesh it was projected on, 0 for the flat plane. Diagnostics and tests.
+  void setMeshChoiceCallback(std::function<void(int64_t frame_utime, int64_t mesh_utime)> callback);
   const Projector& projector() const { return projector_; }
   const RoadBevAccumulator& accumulator() const { return accumulator_; }
   std::shared_ptr<const ground::SweepGround> latestMesh() const;
@@ -127,6 +143,12 @@ class BevBuilder {
     cv::Mat labels;
   };
   void drainFrames();
+  // Whether a frame at utime must still wait for a mesh nearer its time (see the header comment):
+  // no; the sweep covering it is still to come (waits at most mesh_wait_s); a sweep near it waits
+  // for its poses (the next pose decodes it); a sweep near it is in the worker (the caller waits
+  // for the worker: a few ms, so that a frame is never left waiting after the last message).
+  enum class MeshWait { kNo, kSweepToCome, kSweepNeedsPoses, kMeshInWorker };
+  MeshWait meshWait(int64_t utime) const;
   void project(int64_t utime, const cv::Mat& labels, const Eigen::Isometry3d& pose);
   void tryPendingSweep();
   void buildMesh(const ground::SweepPoints& points);
@@ -144,12 +166,16 @@ class BevBuilder {
   std::map<int64_t, int64_t> closing_;  // road id -> close utime
   std::vector<RoadBev> closed_;
   std::function<void(int64_t)> on_projected_;
+  std::function<void(int64_t, int64_t)> on_mesh_choice_;
+  int64_t newest_sweep_end_ = 0;  // last packet time of the newest sweep received
+  bool finishing_ = false;
 
-  mutable std::mutex mutex_;  // guards stats_ mesh fields, mesh_, work_
-  std::condition_variable cv_;
+  mutable std::mutex mutex_;  // guards everything here (the worker takes it to pick work and publish)
+  std::condition_variable_any cv_;  // also waited on with mutex_ itself (drainFrames)
   BevBuilderStats stats_;
-  std::shared_ptr<const ground::SweepGround> mesh_;
-  std::optional<ground::SweepPoints> work_;
+  std::deque<std::shared_ptr<const ground::SweepGround>> meshes_;  // finished, oldest first
+  std::deque<ground::SweepPoints> work_;                          // waiting for the worker
+  int64_t working_utime_ = 0;                                     // middle of the sweep in the worker
   bool working_ = false, stop_ = false;
   std::thread worker_;
 };

@@ -1,7 +1,10 @@
 #include "core/bev/projector.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
+#include <optional>
 
 namespace lanemap::bev {
 
@@ -45,6 +48,7 @@ Projector::Projector(const camera::CameraModel& camera, const ProjectorOptions& 
   centre_ = camera_.opticalCentreVehicle().cast<float>();
   buildRays();
   buildLattice();
+  buildRaster();
 }
 
 void Projector::buildRays() {
@@ -89,15 +93,286 @@ void Projector::buildLattice() {
     if (spacing > 0.0 && have_last && (hit - last_hit).norm() < spacing) continue;
     have_last = true;
     last_hit = hit;
-    rows_.push_back(r);
     int step = 1;
     if (spacing > 0.0) {
       const double across = (rays_[ic + 1].flat_hit - hit).norm();
       step = std::max(1, static_cast<int>(std::floor(spacing / std::max(across, 1e-6))));
     }
+    r.step = step;
+    rows_.push_back(r);
     for (int u = r.u0; u <= r.u1; u += step) {
       const int i = v * w + u;
       if (candidate_[i]) lattice_.push_back(i);
+    }
+  }
+}
+
+void Projector::buildRaster() {
+  const int w = camera_.width();
+  const Eigen::Matrix3f r_cv = camera_.vehicleToCamera().linear().cast<float>();
+  compact_.assign(rays_.size(), -1);
+  raster_row_of_v_.assign(camera_.height(), -1);
+  std::vector<Row> rows(rows_.rbegin(), rows_.rend());  // v ascending
+  qx_min_ = qy_min_ = std::numeric_limits<float>::infinity();
+  qx_max_ = qy_max_ = -qx_min_;
+  raster_ok_ = true;
+  for (const Row& r : rows) {
+    RasterRow rr;
+    rr.v = r.v;
+    rr.u0 = r.u0;
+    rr.u1 = r.u1;
+    rr.step = r.step;
+    rr.offset = static_cast<int>(rqx_.size());
+    rr.qy_lo = std::numeric_limits<float>::infinity();
+    rr.qy_hi = -rr.qy_lo;
+    for (int u = r.u0; u <= r.u1; u += r.step) {  // the lattice pixels of the row
+      const size_t i = static_cast<size_t>(r.v) * w + u;
+      if (!candidate_[i]) continue;
+      const Eigen::Vector3f dc = r_cv * rays_[i].dir;
+      // The raster needs rays in front of the camera and x increasing along the row.
+      if (!(dc.z() > 1e-6f)) raster_ok_ = false;
+      const float qx = dc.x() / dc.z(), qy = dc.y() / dc.z();
+      if (static_cast<int>(rqx_.size()) > rr.offset && !(qx > rqx_.back())) raster_ok_ = false;
+      compact_[i] = static_cast<int32_t>(rqx_.size());
+      rqx_.push_back(qx);
+      rqy_.push_back(qy);
+      rr.qy_lo = std::min(rr.qy_lo, qy);
+      rr.qy_hi = std::max(rr.qy_hi, qy);
+    }
+    if (!raster_ok_) break;
+    const int n = static_cast<int>(rqx_.size()) - rr.offset;
+    if (n == 0) continue;
+    rr.n = n;
+    rr.qx_lo = rqx_[rr.offset];
+    const float qx_hi = rqx_.back();
+    rr.lut_n = n;
+    rr.lut_step = n > 1 ? (qx_hi - rr.qx_lo) / static_cast<float>(n - 1) : 1.0f;
+    if (!(rr.lut_step > 0.0f)) rr.lut_step = 1.0f;
+    rr.lut_inv_step = 1.0f / rr.lut_step;
+    rr.lut_begin = static_cast<int>(lut_.size());
+    int j = 0;
+    for (int k = 0; k < rr.lut_n; ++k) {
+      const float start = rr.qx_lo + static_cast<float>(k) * rr.lut_step;
+      while (j < n && rqx_[rr.offset + j] < start) ++j;
+      // Float rounding of `start` may put it a hair past a pixel: step back to stay conservative.
+      lut_.push_back(std::max(0, j - 1));
+    }
+    qx_min_ = std::min(qx_min_, rr.qx_lo);
+    qx_max_ = std::max(qx_max_, qx_hi);
+    qy_min_ = std::min(qy_min_, rr.qy_lo);
+    qy_max_ = std::max(qy_max_, rr.qy_hi);
+    raster_row_of_v_[rr.v] = static_cast<int32_t>(raster_rows_.size());
+    raster_rows_.push_back(rr);
+  }
+  if (!raster_ok_ || raster_rows_.empty()) {
+    raster_ok_ = false;
+    raster_rows_.clear();
+    rqx_.clear();
+    rqy_.clear();
+    lut_.clear();
+    compact_.assign(rays_.size(), -1);
+    raster_row_of_v_.assign(camera_.height(), -1);
+    return;
+  }
+  const size_t nr = raster_rows_.size();
+  row_qy_hi_max_.resize(nr);
+  row_qy_lo_min_.resize(nr);
+  for (size_t k = 0; k < nr; ++k) {
+    row_qy_hi_max_[k] = std::max(raster_rows_[k].qy_hi, k ? row_qy_hi_max_[k - 1] : -std::numeric_limits<float>::infinity());
+  }
+  for (size_t k = nr; k-- > 0;) {
+    row_qy_lo_min_[k] = std::min(raster_rows_[k].qy_lo, k + 1 < nr ? row_qy_lo_min_[k + 1] : std::numeric_limits<float>::infinity());
+  }
+}
+
+namespace {
+
+constexpr float kEdge = 1e-6f;  // barycentric tolerance at triangle edges (relative)
+
+// 1 / camera depth of the hit of ray (qx, qy, 1) on a triangle (ViewTriangle::l), 0 when it misses.
+inline float rayWeight(const std::array<Eigen::Vector3f, 3>& l, float qx, float qy) {
+  const float a = l[0].x() * qx + l[0].y() * qy + l[0].z();
+  const float b = l[1].x() * qx + l[1].y() * qy + l[1].z();
+  const float g = l[2].x() * qx + l[2].y() * qy + l[2].z();
+  const float s = a + b + g, tol = -kEdge * s;
+  return s > 0.0f && a >= tol && b >= tol && g >= tol ? s : 0.0f;
+}
+
+// Bounding box in undistorted normalised coordinates of {q : l_k . (q, 1) >= 0, k = 0..2} inside the
+// box [x0, x1] x [y0, y1] (Sutherland-Hodgman on the box). False when empty.
+bool clippedBox(const std::array<Eigen::Vector3f, 3>& l, float& x0, float& y0, float& x1, float& y1) {
+  std::array<Eigen::Vector2f, 8> a, b;
+  a[0] = {x0, y0};
+  a[1] = {x1, y0};
+  a[2] = {x1, y1};
+  a[3] = {x0, y1};
+  int n = 4;
+  for (const auto& e : l) {
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector2f& p = a[i];
+      const Eigen::Vector2f& q = a[(i + 1) % n];
+      const float fp = e.x() * p.x() + e.y() * p.y() + e.z(), fq = e.x() * q.x() + e.y() * q.y() + e.z();
+      if (fp >= 0 && m < 8) b[m++] = p;
+      if ((fp >= 0) != (fq >= 0) && m < 8) b[m++] = p + (fp / (fp - fq)) * (q - p);
+    }
+    n = m;
+    if (n == 0) return false;
+    a = b;
+  }
+  x0 = y0 = std::numeric_limits<float>::infinity();
+  x1 = y1 = -x0;
+  for (int i = 0; i < n; ++i) {
+    x0 = std::min(x0, a[i].x());
+    x1 = std::max(x1, a[i].x());
+    y0 = std::min(y0, a[i].y());
+    y1 = std::max(y1, a[i].y());
+  }
+  return true;
+}
+
+}  // namespace
+
+void Projector::rasterise(const ground::MeshGround& mesh, const Eigen::Isometry3d& vehicle_to_enu,
+                          MeshRaster& out) const {
+  const auto& m = mesh.mesh();
+  out.tri.assign(rqx_.size(), -1);
+  out.view.clear();
+  std::vector<float> zw(rqx_.size(), 0.0f);  // inverse depth of the nearest triangle so far
+  const Eigen::Vector3d c = vehicle_to_enu * centre_.cast<double>();
+  const Eigen::Matrix3d r_ce = camera_.vehicleToCamera().linear() * vehicle_to_enu.linear().transpose();
+  // Range cull: a triangle whose (x, y) box is farther than max_range_m from the camera cannot be
+  // hit within range (the ray cast stops there).
+  const double range = options_.max_range_m + 1e-3, range2 = range * range;
+  // Per vertex: camera frame, image (x, y) when well in front, and flags whose AND over a triangle
+  // culls it: all behind the camera, all on the outer side of one edge of the image's box, all
+  // beyond range (then the triangle's box decides).
+  enum : uint8_t { kBehind = 1, kNotFront = 2, kFar = 4, kLeft = 8, kRight = 16, kAbove = 32, kBelow = 64 };
+  struct Vert {
+    Eigen::Vector3f p;
+    Eigen::Vector2f q;
+    uint8_t flags;
+  };
+  std::vector<Vert> vs(m.vertices.size());
+  for (size_t i = 0; i < m.vertices.size(); ++i) {
+    const Eigen::Vector3d e = m.vertices[i] - c;
+    Vert& v = vs[i];
+    v.p = (r_ce * e).cast<float>();
+    v.flags = e.head<2>().squaredNorm() > range2 ? kFar : 0;
+    if (v.p.z() <= 0.0f) v.flags |= kBehind;
+    if (v.p.z() > 1e-3f) {
+      v.q = v.p.head<2>() * (1.0f / v.p.z());
+      v.flags |= (v.q.x() < qx_min_ ? kLeft : 0) | (v.q.x() > qx_max_ ? kRight : 0) | (v.q.y() < qy_min_ ? kAbove : 0) |
+                 (v.q.y() > qy_max_ ? kBelow : 0);
+    } else {
+      v.flags |= kNotFront;
+    }
+  }
+  const int nr = static_cast<int>(raster_rows_.size());
+  for (int32_t ti = 0; ti < static_cast<int32_t>(m.triangles.size()); ++ti) {
+    const auto& t = m.triangles[ti];
+    const Vert& va = vs[t[0]];
+    const Vert& vb = vs[t[1]];
+    const Vert& vc = vs[t[2]];
+    const uint8_t all = va.flags & vb.flags & vc.flags;
+    if (all & (kBehind | kLeft | kRight | kAbove | kBelow)) continue;
+    if (all & kFar) {
+      const auto& pa = m.vertices[t[0]];
+      const auto& pb = m.vertices[t[1]];
+      const auto& pc = m.vertices[t[2]];
+      const double dx = std::max({0.0, std::min({pa.x(), pb.x(), pc.x()}) - c.x(), c.x() - std::max({pa.x(), pb.x(), pc.x()})});
+      const double dy = std::max({0.0, std::min({pa.y(), pb.y(), pc.y()}) - c.y(), c.y() - std::max({pa.y(), pb.y(), pc.y()})});
+      if (dx * dx + dy * dy > range2) continue;
+    }
+    const Eigen::Vector3f& A = va.p;
+    const Eigen::Vector3f& B = vb.p;
+    const Eigen::Vector3f& C = vc.p;
+    // In front of the camera: the triangle's image, for exact spans per row; else its clipped box.
+    const bool front = !((va.flags | vb.flags | vc.flags) & kNotFront);
+    float x0 = qx_min_, y0 = qy_min_, x1 = qx_max_, y1 = qy_max_;
+    if (front) {
+      x0 = std::max(x0, std::min({va.q.x(), vb.q.x(), vc.q.x()}));
+      x1 = std::min(x1, std::max({va.q.x(), vb.q.x(), vc.q.x()}));
+      y0 = std::max(y0, std::min({va.q.y(), vb.q.y(), vc.q.y()}));
+      y1 = std::min(y1, std::max({va.q.y(), vb.q.y(), vc.q.y()}));
+      if (x0 > x1 || y0 > y1) continue;
+    }
+    std::array<Eigen::Vector3f, 3> l{B.cross(C), C.cross(A), A.cross(B)};
+    const float det = A.dot(l[0]);
+    // A plane through the optical centre: rays meet it edge-on or not at all.
+    if (!(det * det > 1e-14f * A.squaredNorm() * B.squaredNorm() * C.squaredNorm())) continue;
+    for (auto& e : l) e /= det;
+    if (!front && !clippedBox(l, x0, y0, x1, y1)) continue;
+    const int32_t vi = static_cast<int32_t>(out.view.size());
+    {
+      ViewTriangle vt;
+      vt.l = l;
+      const Eigen::Vector3d& pa = m.vertices[t[0]];
+      vt.n = (m.vertices[t[1]] - pa).cross(m.vertices[t[2]] - pa);
+      vt.nd = vt.n.dot(pa - c);
+      vt.index = ti;
+      out.view.push_back(vt);
+    }
+    // Edges for the row spans: a point, the y range and dx/dy.
+    struct Edge {
+      float x, y, y_lo, y_hi, slope;
+    };
+    std::array<Edge, 3> edges{};
+    if (front) {
+      const std::array<const Eigen::Vector2f*, 3> q{&va.q, &vb.q, &vc.q};
+      for (int e = 0; e < 3; ++e) {
+        const Eigen::Vector2f& p = *q[e];
+        const Eigen::Vector2f& o = *q[(e + 1) % 3];
+        edges[e] = Edge{p.x(), p.y(), std::min(p.y(), o.y()), std::max(p.y(), o.y()),
+                        o.y() != p.y() ? (o.x() - p.x()) / (o.y() - p.y()) : 0.0f};
+      }
+    }
+    // Rows whose y range meets [y0, y1].
+    int r = static_cast<int>(std::lower_bound(row_qy_hi_max_.begin(), row_qy_hi_max_.end(), y0) - row_qy_hi_max_.begin());
+    for (; r < nr && row_qy_lo_min_[r] <= y1; ++r) {
+      const RasterRow& row = raster_rows_[r];
+      if (row.qy_hi < y0 || row.qy_lo > y1) continue;
+      float xa = x0, xb = x1;
+      if (front) {
+        // x extent of the triangle's image within the row's band of y (vertices inside the band,
+        // edges crossing its two lines), a hair wider so rounding never loses a pixel.
+        const float ya = std::max(row.qy_lo, y0), yb = std::min(row.qy_hi, y1);
+        xa = std::numeric_limits<float>::infinity();
+        xb = -xa;
+        // Each edge's part inside the band: its x at both ends (a horizontal edge's far end is
+        // the next edge's start). Branch-free: a miss contributes +-infinity.
+        for (const Edge& e : edges) {
+          const float lo = std::max(ya, e.y_lo), hi = std::min(yb, e.y_hi);
+          const float x_lo = e.x + (lo - e.y) * e.slope, x_hi = e.x + (hi - e.y) * e.slope;
+          const bool in = lo <= hi;
+          xa = std::min(xa, in ? std::min(x_lo, x_hi) : std::numeric_limits<float>::infinity());
+          xb = std::max(xb, in ? std::max(x_lo, x_hi) : -std::numeric_limits<float>::infinity());
+        }
+        if (xa > xb) continue;
+        xa = std::max(x0, xa - 1e-5f);
+        xb = std::min(x1, xb + 1e-5f);
+      }
+      // Lookup-table bin of xa (truncation is floor here: negative values clamp to bin 0).
+      const float kf = (xa - row.qx_lo) * row.lut_inv_step;
+      const int k = kf <= 0.0f ? 0 : static_cast<int>(std::min(kf, static_cast<float>(row.lut_n - 1)));
+      const int end = row.offset + row.n;
+      const float* qxs = rqx_.data();
+      const float* qys = rqy_.data();
+      float* z = zw.data();
+      int32_t* owner = out.tri.data();
+      for (int ci = row.offset + lut_[row.lut_begin + k]; ci < end; ++ci) {
+        const float qx = qxs[ci];
+        if (qx > xb) break;
+        const float qy = qys[ci];
+        const float a = l[0].x() * qx + l[0].y() * qy + l[0].z();
+        const float b = l[1].x() * qx + l[1].y() * qy + l[1].z();
+        const float g = l[2].x() * qx + l[2].y() * qy + l[2].z();
+        const float s = a + b + g;
+        const float tol = -kEdge * s;
+        if (!(s > z[ci]) || a < tol || b < tol || g < tol) continue;
+        z[ci] = s;
+        owner[ci] = vi;
+      }
     }
   }
 }
@@ -158,13 +433,63 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
   const int x0 = static_cast<int>(std::floor(c.x() / res)) - R, y0 = static_cast<int>(std::floor(c.y() / res)) - R;
   std::vector<uint8_t> raster(static_cast<size_t>(n) * n, 0);
   const Eigen::Matrix3d rot = vehicle_to_enu.linear();
+  const int w = camera_.width();
+  const bool use_raster = mesh && rasterises();
+  const double range2 = options_.max_range_m * options_.max_range_m;
+  MeshRaster mr;
+  if (use_raster) rasterise(*mesh, vehicle_to_enu, mr);
+  const Eigen::Matrix3f r_cv = camera_.vehicleToCamera().linear().cast<float>();
   for (const auto& [i, bits] : px) {
     const Ray& ray = rays_[i];
     Eigen::Vector3d p = vehicle_to_enu * ray.flat_hit.cast<double>();
     if (mesh) {
       const Eigen::Vector3d d = rot * ray.dir.cast<double>();
-      const double max_t = options_.max_range_m / std::max(d.head<2>().norm(), 1e-9);
-      if (const auto t = mesh->intersect(c, d, max_t)) {
+      // Range limit on t: horizontal distance t |d_xy| <= max_range_m (squared here; the ray cast
+      // below takes it as max_t).
+      const double dxy2 = d.x() * d.x() + d.y() * d.y();
+      std::optional<double> t;
+      bool settled = false;
+      if (use_raster) {
+        int32_t k = -1;
+        if (compact_[i] >= 0) {  // a lattice pixel: its z-buffer triangle
+          k = mr.tri[compact_[i]];
+          settled = k < 0;  // no triangle in front of the camera on this ray within range
+        } else if (const int32_t r = raster_row_of_v_[i / w]; r >= 0) {
+          // A separation pixel between two lattice pixels: the nearer of their triangles that
+          // this pixel's ray meets (none: ray-cast).
+          const Eigen::Vector3f dc = r_cv * ray.dir;
+          if (dc.z() > 1e-6f) {
+            const float qx = dc.x() / dc.z(), qy = dc.y() / dc.z();
+            const RasterRow& row = raster_rows_[r];
+            const int u = i % w, ul = row.u0 + (u - row.u0) / row.step * row.step;
+            float best = 0.0f;
+            for (const int uu : {ul, ul + row.step}) {
+              if (uu > row.u1 || compact_[static_cast<size_t>(i - u + uu)] < 0) continue;
+              const int32_t kk = mr.tri[compact_[static_cast<size_t>(i - u + uu)]];
+              if (kk < 0) continue;
+              const float s = rayWeight(mr.view[kk].l, qx, qy);
+              if (s > best) {
+                best = s;
+                k = kk;
+              }
+            }
+          }
+        }
+        if (k >= 0) {
+          // The hit on the triangle's plane, in double (the ray cast's t up to rounding).
+          const ViewTriangle& vt = mr.view[k];
+          const double h = vt.nd / vt.n.dot(d);
+          if (h > 0.0 && std::isfinite(h)) {
+            settled = true;
+            if (h * h * dxy2 <= range2) t = h;  // the nearest hit; beyond range every hit is
+          }
+        }
+      }
+      if (!settled) {
+        t = mesh->intersect(c, d, options_.max_range_m / std::max(std::sqrt(dxy2), 1e-9));
+        ++splat.raycast;
+      }
+      if (t) {
         p = c + *t * d;
         ++splat.mesh_hits;
       } else if (mesh->covers(p.x(), p.y())) {

@@ -30,6 +30,24 @@
 //   horizontally); where the mesh has no triangle under the flat-ground hit the pixel falls back to
 //   the flat plane; a ray that misses a mesh that does lie under it (it goes over a crest, or past
 //   max range) is dropped, because putting it on the flat plane would be wrong by metres.
+// - Mesh raster (mesh_raster, default): casting every ray into the mesh's grid index costs ~20x the
+//   flat projection (thin ring-to-ring triangles, dozens per index cell). The mesh is a surface seen
+//   from one camera, so it is rasterised into the image instead: every triangle in range is put in
+//   the camera frame (vertices V0, V1, V2 relative to the optical centre), and the pixel ray
+//   r = (x, y, 1) (undistorted normalised coordinates, computed once per pixel) is written as
+//   r = a V0 + b V1 + c V2 with a = r.(V1 x V2) / det(V0, V1, V2), ...: the ray meets the triangle
+//   in front of the camera exactly when a, b, c >= 0, at camera depth 1 / (a + b + c). Perspective
+//   maps the triangle's edges to straight lines in (x, y), so this test is exact under distortion
+//   (it runs on the undistorted coordinates of the real pixels) and needs no clipping for
+//   triangles reaching behind the camera. Each triangle visits the lattice pixels of the kept rows
+//   inside its exact x span on each row (a per-row lookup table gives the first one) and keeps, per
+//   pixel, the nearest triangle (a z-buffer of inverse depth). The pixel's hit is then the ray's
+//   intersection with that triangle's plane, in double. A separation pixel off the lattice takes
+//   the nearer of its two lattice neighbours' triangles that its own ray meets, and is ray-cast
+//   when neither does. So the cells are those of the ray cast up to float rounding at triangle
+//   edges (tests/bev/mesh_raster_test.cc: 0 to 0.007 % of the cells differ). mesh_raster = false
+//   casts every ray (the reference). lanemap-bench-bev: 24x the flat projection before, 2.0x now
+//   with the decimated mesh (core/ground/sweep_ground.h), 2.7x on the full mesh.
 #pragma once
 
 #include "core/bev/bev_grid.h"
@@ -39,6 +57,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -58,6 +77,7 @@ struct ProjectorOptions {
   double sample_spacing_m = 0.1;      // pixel lattice spacing on the flat ground; 0: every pixel
   bool lane_separation = true;        // derive kLaneSeparation from lane-class transitions
   double max_separation_gap_m = 0.6;  // paint between two lane classes at most this wide
+  bool mesh_raster = true;            // rasterise the mesh into the image; false: ray-cast each pixel
 };
 
 struct SplatCell {
@@ -74,6 +94,7 @@ struct FrameSplat {
   size_t mesh_hits = 0;       // placed on the mesh
   size_t flat = 0;            // placed on the flat plane (flat model, or no mesh triangle there)
   size_t dropped = 0;         // ray missed a mesh lying under it
+  size_t raycast = 0;         // mesh pixels the raster did not settle, ray-cast into the index
 };
 
 // Adds a frame's splat to a grid (each cell's layers once) and counts the frame.
@@ -98,6 +119,8 @@ class Projector {
   const camera::CameraModel& camera() const { return camera_; }
   size_t candidatePixels() const { return candidates_; }
   size_t latticePixels() const { return lattice_.size(); }
+  // Whether mesh projection rasterises (mesh_raster and a camera whose kept rows allow it).
+  bool rasterises() const { return options_.mesh_raster && raster_ok_; }
 
  private:
   struct Ray {
@@ -107,9 +130,33 @@ class Projector {
   struct Row {
     int v = 0;
     int u0 = 0, u1 = -1;  // candidate columns [u0, u1]
+    int step = 1;         // lattice: every step-th column from u0
+  };
+  // A kept row as the mesh raster sees it: its lattice pixels are compact indices
+  // [offset, offset + n) of rqx_ / rqy_ (undistorted normalised coordinates, x increasing).
+  struct RasterRow {
+    int v = 0, u0 = 0, u1 = -1, step = 1;
+    int offset = 0, n = 0;
+    float qy_lo = 0, qy_hi = 0;     // y range over the row's pixels
+    float qx_lo = 0, lut_step = 1;  // lookup table: bin k starts at qx_lo + k * lut_step ...
+    float lut_inv_step = 1;
+    int lut_begin = 0, lut_n = 0;   // ... and lut_[lut_begin + k] is the first pixel (from u0) at or past it
   };
   void buildRays();
   void buildLattice();
+  void buildRaster();
+  // One frame's raster: the triangles in view and, per compact pixel, the nearest of them.
+  struct ViewTriangle {
+    std::array<Eigen::Vector3f, 3> l;  // (x, y, 1) . l[k]: barycentric weight k over camera depth
+    Eigen::Vector3d n;                 // plane normal (ENU, unnormalised) ...
+    double nd = 0;                     // ... and n . (vertex - optical centre): hit t = nd / n . d
+    int32_t index = 0;                 // in the mesh
+  };
+  struct MeshRaster {
+    std::vector<ViewTriangle> view;
+    std::vector<int32_t> tri;  // per compact pixel: index into view, -1: no triangle
+  };
+  void rasterise(const ground::MeshGround& mesh, const Eigen::Isometry3d& vehicle_to_enu, MeshRaster& out) const;
   // Appends the separation pixels of kept row r to `out` as (pixel index, layer bits).
   void separationPixels(const cv::Mat& labels, const Row& r, std::vector<std::pair<int, uint8_t>>& out) const;
 
@@ -121,6 +168,16 @@ class Projector {
   size_t candidates_ = 0;
   std::vector<Row> rows_;           // kept rows
   std::vector<int> lattice_;        // pixel indices of the lattice
+  // Mesh raster (see the header comment).
+  bool raster_ok_ = false;
+  std::vector<RasterRow> raster_rows_;      // kept rows, v ascending
+  std::vector<float> row_qy_hi_max_;        // running max of qy_hi (ascending v)
+  std::vector<float> row_qy_lo_min_;        // running min of qy_lo from the end
+  std::vector<float> rqx_, rqy_;            // per compact pixel
+  std::vector<int32_t> compact_;            // per pixel: compact index, -1 off the lattice
+  std::vector<int32_t> raster_row_of_v_;    // image row -> raster_rows_ index, -1 if not kept
+  std::vector<int32_t> lut_;
+  float qx_min_ = 0, qx_max_ = 0, qy_min_ = 0, qy_max_ = 0;  // box of all compact pixels
 };
 
 }  // namespace lanemap::bev

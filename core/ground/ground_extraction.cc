@@ -63,15 +63,16 @@ void sectorGround(const std::vector<Eigen::Vector3d>& pts, const std::vector<std
   }
 }
 
-// Marks the points on vertical structures (see the header).
-std::vector<uint8_t> verticalStructures(const std::vector<Eigen::Vector3d>& pts, const GroundExtractionOptions& o) {
+// Marks the points on vertical structures (see the header). az: atan2(y, x) + pi, r: horizontal
+// range, per point (computed once for this and the binning).
+std::vector<uint8_t> verticalStructures(const std::vector<Eigen::Vector3d>& pts, const std::vector<double>& az,
+                                        const std::vector<double>& r, const GroundExtractionOptions& o) {
   const int slices = std::max(1, static_cast<int>(std::lround(360.0 / o.azimuth_slice_deg)));
   std::vector<std::vector<std::pair<double, int>>> by_slice(slices);
   for (size_t i = 0; i < pts.size(); ++i) {
     if (!pts[i].allFinite()) continue;
-    const double az = std::atan2(pts[i].y(), pts[i].x()) + M_PI;
-    const int s = std::min(slices - 1, static_cast<int>(az / (2.0 * M_PI) * slices));
-    by_slice[s].emplace_back(std::hypot(pts[i].x(), pts[i].y()), static_cast<int>(i));
+    const int s = std::min(slices - 1, static_cast<int>(az[i] / (2.0 * M_PI) * slices));
+    by_slice[s].emplace_back(r[i], static_cast<int>(i));
   }
   std::vector<uint8_t> vertical(pts.size(), 0);
   for (auto& slice : by_slice) {
@@ -97,16 +98,21 @@ std::vector<int> extractGround(const std::vector<Eigen::Vector3d>& points, const
   const int nbins = static_cast<int>(o.range_edges_m.size()) - 1;
   if (nbins < 1 || o.sectors < 1) return {};
   std::vector<std::vector<std::vector<int>>> cells(o.sectors, std::vector<std::vector<int>>(nbins));
-  const std::vector<uint8_t> vertical = verticalStructures(points, o);
+  std::vector<double> az(points.size(), 0.0), range(points.size(), 0.0);
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite()) continue;
+    az[i] = std::atan2(points[i].y(), points[i].x()) + M_PI;  // [0, 2 pi]
+    range[i] = std::hypot(points[i].x(), points[i].y());
+  }
+  const std::vector<uint8_t> vertical = verticalStructures(points, az, range, o);
   for (size_t i = 0; i < points.size(); ++i) {
     const auto& p = points[i];
     if (!p.allFinite() || vertical[i]) continue;
-    const double r = std::hypot(p.x(), p.y());
+    const double r = range[i];
     const auto it = std::upper_bound(o.range_edges_m.begin(), o.range_edges_m.end(), r);
     if (it == o.range_edges_m.begin() || it == o.range_edges_m.end()) continue;
     const int bin = static_cast<int>(it - o.range_edges_m.begin()) - 1;
-    const double az = std::atan2(p.y(), p.x()) + M_PI;  // [0, 2 pi]
-    const int sector = std::min(o.sectors - 1, static_cast<int>(az / (2.0 * M_PI) * o.sectors));
+    const int sector = std::min(o.sectors - 1, static_cast<int>(az[i] / (2.0 * M_PI) * o.sectors));
     cells[sector][bin].push_back(static_cast<int>(i));
   }
   std::vector<int> ground;

@@ -149,10 +149,22 @@ std::optional<double> MeshGround::heightAt(double east, double north) const {
   const int iy = static_cast<int>(std::floor((north - min_.y()) / options_.cell_m));
   const Cell* c = cellAt(ix, iy);
   if (!c) return std::nullopt;
-  const Eigen::Vector3d o(east, north, 0.0), d(0.0, 0.0, 1.0);
+  // rayTriangle with the vertical ray, written out in 2D (the same u, v and tolerances): this runs
+  // for every projected pixel that misses the mesh, over dozens of thin triangles per cell.
   for (uint32_t k = c->begin; k < c->end; ++k) {
     const auto& t = mesh_.triangles[tri_index_[k]];
-    if (auto z = rayTriangle(o, d, mesh_.vertices[t[0]], mesh_.vertices[t[1]], mesh_.vertices[t[2]])) return *z;
+    const Eigen::Vector3d& a = mesh_.vertices[t[0]];
+    const Eigen::Vector3d& b = mesh_.vertices[t[1]];
+    const Eigen::Vector3d& cc = mesh_.vertices[t[2]];
+    const double e1x = b.x() - a.x(), e1y = b.y() - a.y(), e2x = cc.x() - a.x(), e2y = cc.y() - a.y();
+    const double det = e1x * e2y - e1y * e2x;
+    if (std::abs(det) < 1e-15) continue;
+    const double inv = 1.0 / det, sx = east - a.x(), sy = north - a.y();
+    const double u = (sx * e2y - sy * e2x) * inv;
+    if (u < -1e-9 || u > 1.0 + 1e-9) continue;
+    const double v = (e1x * sy - e1y * sx) * inv;
+    if (v < -1e-9 || u + v > 1.0 + 1e-9) continue;
+    return a.z() + u * (b.z() - a.z()) + v * (cc.z() - a.z());
   }
   return std::nullopt;
 }

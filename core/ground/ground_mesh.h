@@ -1,6 +1,7 @@
 // The topographic ground model of METHOD.md section 3: the LIDAR's ground points (ENU), one mesh
-// vertex per point, Delaunay-triangulated in (east, north) with their height kept (2.5D), and
-// camera rays intersected with the triangles.
+// vertex per point (buildSweepGround first merges them per 0.3 m cell, sweep_ground.h),
+// Delaunay-triangulated in (east, north) with their height kept (2.5D), and camera rays
+// intersected with the triangles (the Projector rasterises the mesh instead, projector.h).
 //
 // - triangulateGround (delaunay.cc, the only file that includes CGAL): CGAL's
 //   Delaunay_triangulation_2 over (x, y) with each vertex's index as info, so z comes back exactly.

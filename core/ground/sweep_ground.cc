@@ -1,6 +1,9 @@
 #include "core/ground/sweep_ground.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <utility>
 
 namespace lanemap::ground {
 
@@ -11,6 +14,29 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 }
 
 }  // namespace
+
+std::vector<Eigen::Vector3d> decimateGround(const std::vector<Eigen::Vector3d>& points, double cell_m) {
+  if (!(cell_m > 0.0)) return points;
+  std::vector<std::pair<uint64_t, int>> keyed;
+  keyed.reserve(points.size());
+  const double inv = 1.0 / cell_m;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const auto kx = static_cast<int64_t>(std::floor(points[i].x() * inv));
+    const auto ky = static_cast<int64_t>(std::floor(points[i].y() * inv));
+    const uint64_t key = (static_cast<uint64_t>(kx + (int64_t{1} << 31)) << 32) | static_cast<uint32_t>(ky + (int64_t{1} << 31));
+    keyed.emplace_back(key, static_cast<int>(i));
+  }
+  std::sort(keyed.begin(), keyed.end());  // by cell, then by index: deterministic
+  std::vector<Eigen::Vector3d> out;
+  for (size_t a = 0; a < keyed.size();) {
+    size_t b = a;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (; b < keyed.size() && keyed[b].first == keyed[a].first; ++b) sum += points[keyed[b].second];
+    out.push_back(sum / static_cast<double>(b - a));
+    a = b;
+  }
+  return out;
+}
 
 std::optional<SweepPoints> sweepToEnu(const std::vector<SweepPacket>& packets, const Eigen::Isometry3d& lidar_to_vehicle,
                                       const PoseLookup& pose, std::optional<lidar::Model> model) {
@@ -58,6 +84,8 @@ SweepGround buildSweepGround(const SweepPoints& sweep, const SweepGroundOptions&
     if (vehicle[i].head<2>().squaredNorm() <= max_r2) ground.push_back(sweep.enu[i]);
   }
   g.ground_points = ground.size();
+  ground = decimateGround(ground, options.decimate_m);
+  g.mesh_points = ground.size();
   g.ms_extract = msSince(t0);
   t0 = std::chrono::steady_clock::now();
   TriangleMesh mesh = triangulateGround(ground, options.max_edge_m);

@@ -49,13 +49,22 @@ struct SweepGroundOptions {
   GroundExtractionOptions extraction;
   double max_edge_m = 16.0;     // triangles with a longer edge are dropped (ground_mesh.h)
   double max_range_m = 60.0;    // ground points farther from the car are not triangulated
+  // Ground points are merged per decimate_m x decimate_m cell (east, north) into their mean before
+  // Delaunay; 0: every point is a vertex. A VLP-16 ring has a point every 0.2 deg (3.5 cm at 10 m)
+  // but the rings are metres apart, so the along-ring density buys nothing for the surface, while
+  // it makes thousands of needle triangles (Delaunay, index and the projection's raster all scale
+  // with them). The mean also averages the range noise (tests/ground/sweep_mesh_test.cc).
+  double decimate_m = 0.3;
   MeshGroundOptions index;
 };
+
+// Means of the points per cell x cell square (east, north); cell <= 0: the points unchanged.
+std::vector<Eigen::Vector3d> decimateGround(const std::vector<Eigen::Vector3d>& points, double cell_m);
 
 struct SweepGround {
   std::shared_ptr<const MeshGround> mesh;
   int64_t utime = 0;                 // the sweep's middle
-  size_t points = 0, ground_points = 0;
+  size_t points = 0, ground_points = 0, mesh_points = 0;  // decoded, ground, mesh vertices
   double ms_extract = 0.0, ms_triangulate = 0.0, ms_index = 0.0;
 };
 

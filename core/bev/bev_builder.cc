@@ -1,4 +1,5 @@
 #include "core/bev/bev_builder.h"
+#include "core/io/image_header.h"
 
 #include <opencv2/imgcodecs.hpp>
 #include <yaml-cpp/yaml.h>
@@ -73,7 +74,10 @@ bool decodeLabelImage(LabelEncoding encoding, const uint8_t* data, size_t size, 
     *out = cv::Mat(height, width, CV_8UC1, const_cast<uint8_t*>(data)).clone();
     return true;
   }
-  if (encoding != LabelEncoding::kPng || size == 0) return false;
+  if (encoding != LabelEncoding::kPng || size == 0 || size > 0x7FFFFFFFu) return false;
+  // A PNG whose header claims another size is refused before imdecode allocates for it.
+  const auto header = io::pngSize(data, size);
+  if (!header || header->width != width || header->height != height) return false;
   const cv::Mat buf(1, static_cast<int>(size), CV_8UC1, const_cast<uint8_t*>(data));
   cv::Mat img;
   try {

@@ -11,6 +11,7 @@ PACKAGES=(
   libgeographiclib-dev libpcl-dev libv4l-dev libosmium2-dev libprotozero-dev libbz2-dev zlib1g-dev libexpat1-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev
   osmium-tool iproute2 util-linux
+  clang libclang-rt-14-dev
 )
 if [ $# -gt 0 ]; then PACKAGES=("$@"); fi
 missing=()

@@ -70,7 +70,7 @@ BevBuilderOptions BevBuilderOptions::fromYaml(const YAML::Node& n) {
 }
 
 bool decodeLabelImage(LabelEncoding encoding, const uint8_t* data, size_t size, int width, int height, cv::Mat* out) {
-  if (width <= 0 || height <= 0) return false;
+  if (width <= 0 || height <= 0 || width > 16384 || height > 16384) return false;  // as seg::decodeFrame
   if (encoding == LabelEncoding::kRaw) {
     if (size != static_cast<size_t>(width) * height) return false;
     *out = cv::Mat(height, width, CV_8UC1, const_cast<uint8_t*>(data)).clone();

@@ -306,7 +306,8 @@ std::vector<uint8_t> encodeLabelsPng(const cv::Mat& labels) {
 }
 
 cv::Mat decodeLabels(int8_t encoding, int width, int height, const std::vector<uint8_t>& data) {
-  if (width <= 0 || height <= 0) throw FrameError("labels: bad size");
+  if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
+    throw FrameError("labels: bad size " + std::to_string(width) + "x" + std::to_string(height));
   if (encoding == 0) {
     if (data.size() != static_cast<size_t>(width) * height) throw FrameError("labels: raw size does not match");
     return cv::Mat(height, width, CV_8UC1, const_cast<uint8_t*>(data.data())).clone();

@@ -253,9 +253,9 @@ cv::Mat decodeFrame(int32_t pixelformat, int width, int height, int row_stride, 
       const auto header = io::jpegSize(data, size);
       if (!header) throw FrameError("frame: corrupt JPEG (no frame header in " + std::to_string(size) + " bytes)");
       if (header->width != width || header->height != height)
-        throw FrameError("frame: JPEG header says " + std::to_string(header->width) + "x" +
-                         std::to_string(header->height) + " but the message says " + std::to_string(width) + "x" +
-                         std::to_string(height));
+        throw FrameError("frame: JPEG is " + std::to_string(header->width) + "x" + std::to_string(header->height) +
+                         " but the message says " + std::to_string(width) + "x" + std::to_string(height) +
+                         " (from its header; not decoded)");
       if (size > static_cast<size_t>(std::numeric_limits<int>::max())) throw FrameError("frame: JPEG too large");
       const cv::Mat buf(1, static_cast<int>(size), CV_8UC1, const_cast<uint8_t*>(data));
       try {

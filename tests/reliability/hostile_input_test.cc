@@ -3,9 +3,11 @@
 //    returns -1 instead of throwing std::length_error (which killed the process) or allocating
 //    gigabytes; a valid message still decodes;
 //  - a JPEG or PNG that lies about its size (core/io/image_header.h): refused from its header,
-//    before cv::imdecode allocates for the size it claims.
+//    before cv::imdecode allocates for the size it claims;
+//  - a corrupt OSM PBF: no file descriptor leaks (core/osm readOsm, around libosmium 2.18).
 #include "core/bev/bev_builder.h"
 #include "core/io/image_header.h"
+#include "core/osm/osm_data.h"
 #include "core/seg/segmenter.h"
 #include "lanemap/bev_road_t.hpp"
 #include "lanemap/image_t.hpp"
@@ -16,7 +18,13 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include <unistd.h>
+
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
 #include <vector>
 
 namespace {
@@ -210,6 +218,41 @@ TEST(HostileImages, RawFramesOfAnOddShapeAreFrameErrorsOnly) {
       }
     }
   }
+}
+
+}  // namespace
+
+namespace {
+
+size_t openDescriptors() {
+  size_t n = 0;
+  for (const auto& e : std::filesystem::directory_iterator("/proc/self/fd")) {
+    (void)e;
+    ++n;
+  }
+  return n;
+}
+
+// libosmium 2.18 leaked the file descriptor of every corrupt PBF it failed to parse (found by
+// fuzz/harness/osm_pbf.cc); readOsm closes it now. 50 corrupt files: no descriptor more.
+TEST(HostileOsm, ACorruptPbfLeavesNoOpenDescriptor) {
+  std::ifstream in(std::string(LANEMAP_DATA_DIR) + "/osm/monaco.osm.pbf", std::ios::binary);
+  std::vector<char> pbf((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(pbf.size(), 5000u);
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("lanemap-hostile-" + std::to_string(getpid()) + ".osm.pbf")).string();
+  const size_t before = openDescriptors();
+  for (int i = 0; i < 50; ++i) {
+    std::vector<char> bad(pbf.begin(), pbf.begin() + 3000 + 37 * i);  // cut inside a blob
+    if (i % 2) bad[20 + i] ^= 0x55;                                       // or a broken header
+    std::ofstream(path, std::ios::binary | std::ios::trunc).write(bad.data(), static_cast<std::streamsize>(bad.size()));
+    EXPECT_THROW(osm::readOsm(path), osm::OsmError) << i;
+  }
+  EXPECT_EQ(openDescriptors(), before);
+  std::filesystem::remove(path);
+  // A good file still reads (and leaves nothing open either).
+  EXPECT_FALSE(osm::readOsm(std::string(LANEMAP_DATA_DIR) + "/osm/monaco.osm.pbf").ways.empty());
+  EXPECT_EQ(openDescriptors(), before);
 }
 
 }  // namespace

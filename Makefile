@@ -1,11 +1,12 @@
 # lanemap: the two commands of the README, and what they are made of.
 #   make demo   installs missing Debian packages, builds, simulates a drive and maps it
 #   make test   installs missing Debian packages, builds, runs every test
+#   make fuzz   builds the fuzz harnesses (clang, ASan + UBSan) and runs each FUZZ_SECONDS (60)
 BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 DEMO_OUT ?= demo-out
 
-.PHONY: all deps configure build test demo bench clean
+.PHONY: all deps configure build test demo bench fuzz clean
 
 all: build
 
@@ -27,5 +28,9 @@ demo: build
 bench: build
 	@tools/bench/run_all.sh $(BUILD_DIR)
 
+FUZZ_SECONDS ?= 60
+fuzz: deps
+	@FUZZ_SECONDS=$(FUZZ_SECONDS) fuzz/run.sh $(FUZZ_HARNESSES)
+
 clean:
-	rm -rf $(BUILD_DIR) $(BUILD_DIR).configure.log $(DEMO_OUT)
+	rm -rf $(BUILD_DIR) $(BUILD_DIR).configure.log $(DEMO_OUT) build-fuzz build-fuzz.configure.log

@@ -2,6 +2,7 @@
 # Generates C++ headers with lcm-gen at build time into an INTERFACE library `name`,
 # and, when a JDK and lcm.jar are present, `name_java` -> ${CMAKE_BINARY_DIR}/share/java/<name>.jar
 # so that lcm-spy can decode the messages.
+set(LANEMAP_LCM_GUARD ${CMAKE_CURRENT_LIST_DIR}/lcm_guard.cmake)
 function(lcm_generate)
   cmake_parse_arguments(ARG "" "TARGET;PACKAGE" "FILES" ${ARGN})
   set(cpp_dir ${CMAKE_BINARY_DIR}/lcmtypes/cpp)
@@ -14,7 +15,9 @@ function(lcm_generate)
     OUTPUT ${headers}
     COMMAND ${CMAKE_COMMAND} -E make_directory ${cpp_dir}
     COMMAND ${LCM_GEN} --cpp --cpp-hpath ${cpp_dir} ${ARG_FILES}
-    DEPENDS ${ARG_FILES}
+    # Hostile sizes make decode() fail instead of throwing or allocating gigabytes (issue 18).
+    COMMAND ${CMAKE_COMMAND} -DDIR=${cpp_dir}/${ARG_PACKAGE} -P ${LANEMAP_LCM_GUARD}
+    DEPENDS ${ARG_FILES} ${LANEMAP_LCM_GUARD}
     WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}
     COMMENT "lcm-gen --cpp ${ARG_PACKAGE}")
   add_custom_target(${ARG_TARGET}_gen DEPENDS ${headers})

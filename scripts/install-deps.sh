@@ -12,6 +12,7 @@ PACKAGES=(
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev
   osmium-tool iproute2 util-linux
   chromium chromium-driver                # the viewer's browser test (tests/viewer/browser_test.cc)
+  clang libclang-rt-14-dev                # fuzz/: libFuzzer with ASan + UBSan (make fuzz)
 )
 # npm bundles the viewer's page at build time (web/viewer); a Node.js from elsewhere (NodeSource's
 # nodejs ships its own npm and conflicts with Debian's) is kept.

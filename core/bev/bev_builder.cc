@@ -1,9 +1,11 @@
 #include "core/bev/bev_builder.h"
+#include "core/io/image_header.h"
 
 #include <opencv2/imgcodecs.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include <chrono>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -62,6 +64,7 @@ BevBuilderOptions BevBuilderOptions::fromYaml(const YAML::Node& n) {
   if (l) readGround(l["ground"], o.ground.extraction);
   read(n["poses"], "keep_s", o.pose_keep_s);
   read(n["poses"], "max_gap_s", o.max_pose_gap_s);
+  read(n["poses"], "time_jump_s", o.time_jump_s);
   read(n, "max_pending_frames", o.max_pending_frames);
   read(n, "close_delay_s", o.close_delay_s);
   if (!(o.projector.max_range_m > 0.0) || !(o.ground.index.cell_m > 0.0) || !(o.pose_keep_s > 0.0)) {
@@ -71,13 +74,16 @@ BevBuilderOptions BevBuilderOptions::fromYaml(const YAML::Node& n) {
 }
 
 bool decodeLabelImage(LabelEncoding encoding, const uint8_t* data, size_t size, int width, int height, cv::Mat* out) {
-  if (width <= 0 || height <= 0) return false;
+  if (width <= 0 || height <= 0 || width > 16384 || height > 16384) return false;  // as seg::decodeFrame
   if (encoding == LabelEncoding::kRaw) {
     if (size != static_cast<size_t>(width) * height) return false;
     *out = cv::Mat(height, width, CV_8UC1, const_cast<uint8_t*>(data)).clone();
     return true;
   }
-  if (encoding != LabelEncoding::kPng || size == 0) return false;
+  if (encoding != LabelEncoding::kPng || size == 0 || size > 0x7FFFFFFFu) return false;
+  // A PNG whose header claims another size is refused before imdecode allocates for it.
+  const auto header = io::pngSize(data, size);
+  if (!header || header->width != width || header->height != height) return false;
   const cv::Mat buf(1, static_cast<int>(size), CV_8UC1, const_cast<uint8_t*>(data));
   cv::Mat img;
   try {
@@ -95,7 +101,8 @@ BevBuilder::BevBuilder(const skeleton::Skeleton& skeleton, const camera::CameraM
       options_(options),
       projector_(camera, options.projector),
       accumulator_(skeleton, options.accumulator),
-      poses_(options.pose_keep_s, options.max_pose_gap_s) {
+      poses_(options.pose_keep_s, options.max_pose_gap_s),
+      pose_order_(options.time_jump_s, 3) {
   if (options_.use_lidar && options_.async_mesh) worker_ = std::thread([this] { workerLoop(); });
 }
 
@@ -115,8 +122,30 @@ void BevBuilder::addPose(const TimedPose& pose) {
     ++stats_.poses_invalid;
     return;
   }
-  if (!poses_.add(pose)) {
-    ++stats_.poses_out_of_order;
+  switch (pose_order_.check(pose.utime)) {
+    case geo::TimeOrder::Verdict::kInOrder:
+      break;
+    case geo::TimeOrder::Verdict::kDuplicate:
+      ++stats_.poses_duplicate;
+      return;
+    case geo::TimeOrder::Verdict::kOutOfOrder:
+      ++stats_.poses_out_of_order;
+      return;
+    case geo::TimeOrder::Verdict::kRestart:
+      // The time went back (a log restarted): roads already closing are complete and handed
+      // over; frames and the sweep waiting for a pose of the old time never get one.
+      ++stats_.pose_time_jumps;
+      finishCloses(true);
+      stats_.frames_time_jump += static_cast<int64_t>(pending_.size());
+      pending_.clear();
+      if (pending_sweep_) ++stats_.sweeps_no_pose;
+      pending_sweep_.reset();
+      poses_.clear();
+      last_frame_utime_ = std::numeric_limits<int64_t>::min();
+      break;
+  }
+  if (!poses_.add(pose)) {  // finite but a zero quaternion
+    ++stats_.poses_invalid;
     return;
   }
   tryPendingSweep();  // first: a frame may be waiting for this sweep's mesh
@@ -349,7 +378,7 @@ void BevBuilder::roadsAbandoned(int64_t) {
 // Hands over the closing roads whose delay has passed (all of them at the end of the input).
 void BevBuilder::finishCloses(bool all) {
   for (auto it = closing_.begin(); it != closing_.end();) {
-    const bool due = all || static_cast<double>(poses_.newest() - it->second) >= options_.close_delay_s * 1e6;
+    const bool due = all || static_cast<double>(poses_.newest()) - static_cast<double>(it->second) >= options_.close_delay_s * 1e6;
     const bool frames_waiting = !all && !pending_.empty() && pending_.front().utime <= it->second;
     if (!due || frames_waiting) {
       ++it;

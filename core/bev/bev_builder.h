@@ -35,6 +35,7 @@
 #pragma once
 
 #include "core/bev/pose_buffer.h"
+#include "core/geo/time_order.h"
 #include "core/bev/projector.h"
 #include "core/bev/road_bev.h"
 #include "core/camera/camera_model.h"
@@ -70,6 +71,10 @@ struct BevBuilderOptions {
   double mesh_history_s = 2.0;     // finished meshes kept for late frames
   double pose_keep_s = 10.0;       // pose history
   double max_pose_gap_s = 0.25;    // two poses further apart do not interpolate
+  // Poses whose time goes back by more than this, 3 in a row (a log restarted): the pose history
+  // and the frames waiting for a pose are dropped (counted), and the builder starts over in the
+  // new time. A single older pose is out of order.
+  double time_jump_s = 1.0;
   size_t max_pending_frames = 30;  // frames waiting for a later pose (3 s at 10 Hz)
   double close_delay_s = 0.3;      // a closed road is handed over when poses are this far past it
   Eigen::Isometry3d lidar_to_vehicle = Eigen::Isometry3d::Identity();
@@ -84,6 +89,7 @@ struct BevBuilderStats {
   int64_t frames_decode_error = 0, frames_wrong_size = 0, frames_unknown_class = 0;
   int64_t frames_out_of_order = 0, frames_late = 0, frames_no_pose = 0, frames_queue_full = 0;
   int64_t poses_received = 0, poses_invalid = 0, poses_out_of_order = 0;
+  int64_t poses_duplicate = 0, pose_time_jumps = 0, frames_time_jump = 0;  // frames dropped by a jump
   int64_t sweeps_received = 0, sweeps_meshed = 0, sweeps_no_pose = 0, sweeps_replaced = 0, sweeps_empty = 0;
   int64_t frames_mesh_wait_expired = 0;  // projected without waiting any longer for a nearer mesh
   int64_t roads_opened = 0, roads_closed = 0, roads_discarded = 0, events_unknown_road = 0;
@@ -160,6 +166,7 @@ class BevBuilder {
   Projector projector_;
   RoadBevAccumulator accumulator_;
   PoseBuffer poses_;
+  geo::TimeOrder pose_order_;
   std::deque<PendingFrame> pending_;
   int64_t last_frame_utime_ = 0;
   std::optional<SweepData> pending_sweep_;

@@ -9,7 +9,9 @@ bool PoseBuffer::add(const TimedPose& p) {
   if (!poses_.empty() && p.utime <= poses_.back().utime) return false;
   poses_.push_back(p);
   poses_.back().orientation.normalize();
-  while (poses_.size() > 2 && static_cast<double>(poses_.back().utime - poses_.front().utime) > keep_us_) {
+  // Time differences in double here and below: hostile utimes (INT64_MIN, INT64_MAX) must not
+  // overflow int64 (fuzz/harness/lcm_decode.cc, pose_t).
+  while (poses_.size() > 2 && static_cast<double>(poses_.back().utime) - static_cast<double>(poses_.front().utime) > keep_us_) {
     poses_.pop_front();
   }
   return true;
@@ -23,8 +25,9 @@ PoseBuffer::Lookup PoseBuffer::lookup(int64_t utime, Eigen::Isometry3d* out) con
                              [](const TimedPose& p, int64_t u) { return p.utime < u; });
   const TimedPose& b = *it;
   const TimedPose& a = it == poses_.begin() ? b : *(it - 1);
-  if (static_cast<double>(b.utime - a.utime) > max_gap_us_) return Lookup::kGap;
-  const double f = b.utime == a.utime ? 0.0 : static_cast<double>(utime - a.utime) / static_cast<double>(b.utime - a.utime);
+  const double span = static_cast<double>(b.utime) - static_cast<double>(a.utime);
+  if (span > max_gap_us_) return Lookup::kGap;
+  const double f = b.utime == a.utime ? 0.0 : (static_cast<double>(utime) - static_cast<double>(a.utime)) / span;
   if (out) {
     out->setIdentity();
     out->linear() = a.orientation.slerp(f, b.orientation).toRotationMatrix();

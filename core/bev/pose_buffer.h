@@ -34,6 +34,7 @@ class PoseBuffer {
   Lookup lookup(int64_t utime, Eigen::Isometry3d* vehicle_to_enu) const;
   std::optional<Eigen::Isometry3d> at(int64_t utime) const;
 
+  void clear() { poses_.clear(); }  // a restarted stream (core/geo/time_order.h)
   bool empty() const { return poses_.empty(); }
   size_t size() const { return poses_.size(); }
   int64_t newest() const { return poses_.empty() ? 0 : poses_.back().utime; }

@@ -19,10 +19,14 @@
 #include <osmium/io/any_input.hpp>
 #include <osmium/visitor.hpp>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <filesystem>
 #include <limits>
+#include <set>
+#include <string>
 #include <unordered_set>
 
 namespace lanemap::osm {
@@ -154,6 +158,40 @@ Bounds boundsOfNodes(const std::unordered_map<int64_t, Node>& nodes) {
 
 }  // namespace
 
+namespace {
+
+namespace fs = std::filesystem;
+
+// libosmium 2.18's PBF parser closes its file only when the whole parse succeeds
+// (PBFParser::run): a corrupt .osm.pbf leaked one file descriptor per readOsm (found by
+// fuzz/harness/osm_pbf.cc, which ran out of descriptors after ~25000 inputs). After a failed
+// read, the descriptors open on this file that were not open before are closed. (Another thread
+// opening the same file at the same moment would lose its descriptor: readOsm is a start-up call.)
+std::set<int> descriptorsOn(const std::string& path) {
+  std::set<int> fds;
+  std::error_code ec;
+  const fs::path target = fs::weakly_canonical(path, ec);
+  if (ec) return fds;
+  for (const auto& e : fs::directory_iterator("/proc/self/fd", ec)) {
+    std::error_code link_ec;
+    const fs::path link = fs::read_symlink(e.path(), link_ec);
+    if (link_ec || link != target) continue;
+    try {
+      fds.insert(std::stoi(e.path().filename().string()));
+    } catch (const std::exception&) {
+    }
+  }
+  return fds;
+}
+
+void closeLeaked(const std::set<int>& before, const std::string& path) {
+  for (int fd : descriptorsOn(path)) {
+    if (!before.count(fd)) ::close(fd);
+  }
+}
+
+}  // namespace
+
 OsmData readOsm(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -164,6 +202,7 @@ OsmData readOsm(const std::string& path) {
   OsmData data;
   WayHandler ways;
   osmium::Box header_box;
+  const std::set<int> open_before = descriptorsOn(path);
   try {
     osmium::io::File file{path};
     osmium::io::Reader reader{file, osmium::osm_entity_bits::way | osmium::osm_entity_bits::relation};
@@ -171,6 +210,7 @@ OsmData readOsm(const std::string& path) {
     osmium::apply(reader, ways);
     reader.close();
   } catch (const std::exception& e) {
+    closeLeaked(open_before, path);
     throw OsmError("cannot read OSM file '" + path + "': " + e.what());
   }
   if (ways.ways.empty()) {
@@ -187,6 +227,7 @@ OsmData readOsm(const std::string& path) {
     osmium::apply(reader, nodes);
     reader.close();
   } catch (const std::exception& e) {
+    closeLeaked(open_before, path);
     throw OsmError("cannot read the nodes of OSM file '" + path + "': " + e.what());
   }
   data.nodes = std::move(nodes.nodes);

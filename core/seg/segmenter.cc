@@ -1,5 +1,7 @@
 #include "core/seg/segmenter.h"
 
+#include "core/io/image_header.h"
+
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -8,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 namespace fs = std::filesystem;
 
@@ -255,6 +258,15 @@ cv::Mat decodeFrame(int32_t pixelformat, int width, int height, int row_stride, 
   switch (pixelformat) {
     case kPixelJpeg:
     case kPixelMjpeg: {
+      // The header's size first: a JPEG that claims 65535x65535 in a few kB would otherwise make
+      // imdecode allocate gigabytes before it fails (fuzz/regressions/lcm_decode).
+      const auto header = io::jpegSize(data, size);
+      if (!header) throw FrameError("frame: corrupt JPEG (no frame header in " + std::to_string(size) + " bytes)");
+      if (header->width != width || header->height != height)
+        throw FrameError("frame: JPEG is " + std::to_string(header->width) + "x" + std::to_string(header->height) +
+                         " but the message says " + std::to_string(width) + "x" + std::to_string(height) +
+                         " (from its header; not decoded)");
+      if (size > static_cast<size_t>(std::numeric_limits<int>::max())) throw FrameError("frame: JPEG too large");
       const cv::Mat buf(1, static_cast<int>(size), CV_8UC1, const_cast<uint8_t*>(data));
       try {
         bgr = cv::imdecode(buf, cv::IMREAD_COLOR);
@@ -277,10 +289,14 @@ cv::Mat decodeFrame(int32_t pixelformat, int width, int height, int row_stride, 
         throw FrameError("frame: raw buffer of " + std::to_string(size) + " bytes is too short for " +
                          std::to_string(width) + "x" + std::to_string(height));
       const cv::Mat raw(height, width, bpp == 1 ? CV_8UC1 : bpp == 2 ? CV_8UC2 : CV_8UC3, const_cast<uint8_t*>(data), stride);
-      if (pixelformat == kPixelBgr) raw.copyTo(bgr);
-      else if (pixelformat == kPixelRgb) cv::cvtColor(raw, bgr, cv::COLOR_RGB2BGR);
-      else if (pixelformat == kPixelGray) cv::cvtColor(raw, bgr, cv::COLOR_GRAY2BGR);
-      else cv::cvtColor(raw, bgr, cv::COLOR_YUV2BGR_YUYV);
+      try {
+        if (pixelformat == kPixelBgr) raw.copyTo(bgr);
+        else if (pixelformat == kPixelRgb) cv::cvtColor(raw, bgr, cv::COLOR_RGB2BGR);
+        else if (pixelformat == kPixelGray) cv::cvtColor(raw, bgr, cv::COLOR_GRAY2BGR);
+        else cv::cvtColor(raw, bgr, cv::COLOR_YUV2BGR_YUYV);
+      } catch (const cv::Exception& e) {  // e.g. an odd YUYV width
+        throw FrameError(std::string("frame: cannot convert the raw frame: ") + e.what());
+      }
       return bgr;
     }
     default: {
@@ -300,13 +316,22 @@ std::vector<uint8_t> encodeLabelsPng(const cv::Mat& labels) {
 }
 
 cv::Mat decodeLabels(int8_t encoding, int width, int height, const std::vector<uint8_t>& data) {
-  if (width <= 0 || height <= 0) throw FrameError("labels: bad size");
+  if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
+    throw FrameError("labels: bad size " + std::to_string(width) + "x" + std::to_string(height));
   if (encoding == 0) {
     if (data.size() != static_cast<size_t>(width) * height) throw FrameError("labels: raw size does not match");
     return cv::Mat(height, width, CV_8UC1, const_cast<uint8_t*>(data.data())).clone();
   }
   if (encoding != 1) throw FrameError("labels: unknown encoding " + std::to_string(encoding));
-  cv::Mat m = cv::imdecode(data, cv::IMREAD_UNCHANGED);
+  const auto header = io::pngSize(data.data(), data.size());
+  if (!header || header->width != width || header->height != height)
+    throw FrameError("labels: PNG header does not say " + std::to_string(width) + "x" + std::to_string(height));
+  cv::Mat m;
+  try {
+    m = cv::imdecode(data, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    throw FrameError(std::string("labels: corrupt PNG: ") + e.what());
+  }
   if (m.empty() || m.type() != CV_8UC1 || m.cols != width || m.rows != height)
     throw FrameError("labels: PNG does not decode to a " + std::to_string(width) + "x" + std::to_string(height) + " class image");
   return m;

@@ -85,33 +85,56 @@ bool RoadTracker::Filter::update(const Eigen::Vector2d& z, double dt, double r, 
 // ---- tracker ---------------------------------------------------------------------------------
 
 RoadTracker::RoadTracker(const skeleton::Skeleton& skeleton, RoadTrackerConfig config)
-    : skeleton_(skeleton), config_(config) {}
+    : skeleton_(skeleton), config_(config), order_(config.time_jump_s, 3) {}
+
+void RoadTracker::losePose(const PoseInput& pose, const std::string& detail, std::vector<RoadEvent>& events) {
+  RoadEvent e = makeEvent(RoadEventType::kPoseLost, pose, road_ >= 0 ? road_ : last_road_);
+  e.intersection_id = intersection_;
+  e.detail = detail;
+  events.push_back(e);
+  state_ = State::kSearching;
+  road_ = intersection_ = last_road_ = -1;
+  wrong_way_ = false;
+  filter_ready_ = false;
+  have_prev_ = false;
+  far_since_s_ = -1.0;
+}
 
 std::vector<RoadEvent> RoadTracker::update(const PoseInput& pose) {
   std::vector<RoadEvent> events;
-  if (stats_.poses > 0 && pose.utime <= last_utime_) {
-    ++stats_.out_of_order;
-    return events;
+  switch (order_.check(pose.utime)) {
+    case geo::TimeOrder::Verdict::kInOrder:
+      break;
+    case geo::TimeOrder::Verdict::kDuplicate:
+      ++stats_.duplicates;
+      return events;
+    case geo::TimeOrder::Verdict::kOutOfOrder:
+      ++stats_.out_of_order;
+      return events;
+    case geo::TimeOrder::Verdict::kRestart: {
+      // The time went back (a log restarted): the road being driven belongs to another time.
+      ++stats_.time_jumps;
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "time jumped back by %.1f s",
+                    (static_cast<double>(last_utime_) - static_cast<double>(pose.utime)) * 1e-6);
+      losePose(pose, buf, events);
+      have_last_valid_ = false;
+      lost_reported_ = false;
+      exit_crossings_.clear();
+      break;
+    }
   }
   ++stats_.poses;
   last_utime_ = pose.utime;
 
   // Dropout: no valid pose for longer than pose_gap_s. The current road is abandoned (not closed).
-  if (have_last_valid_ && !lost_reported_ &&
-      (pose.utime - last_valid_utime_) * 1e-6 > config_.pose_gap_s) {
-    RoadEvent e = makeEvent(RoadEventType::kPoseLost, pose, road_ >= 0 ? road_ : last_road_);
-    e.intersection_id = intersection_;
+  // (Differences in double: a hostile utime must not overflow int64.)
+  const double since_valid_s = (static_cast<double>(pose.utime) - static_cast<double>(last_valid_utime_)) * 1e-6;
+  if (have_last_valid_ && !lost_reported_ && since_valid_s > config_.pose_gap_s) {
     char buf[64];
-    std::snprintf(buf, sizeof buf, "no valid pose for %.2f s", (pose.utime - last_valid_utime_) * 1e-6);
-    e.detail = buf;
-    events.push_back(e);
+    std::snprintf(buf, sizeof buf, "no valid pose for %.2f s", since_valid_s);
+    losePose(pose, buf, events);
     lost_reported_ = true;
-    state_ = State::kSearching;
-    road_ = intersection_ = last_road_ = -1;
-    wrong_way_ = false;
-    filter_ready_ = false;
-    have_prev_ = false;
-    far_since_s_ = -1.0;
   }
   if (!pose.valid || !pose.position.allFinite() || !std::isfinite(pose.heading)) {
     ++stats_.invalid;
@@ -128,7 +151,7 @@ std::vector<RoadEvent> RoadTracker::update(const PoseInput& pose) {
     filter_.reset(pose.position, pose.velocity);
     filter_ready_ = true;
   } else {
-    const double dt = (pose.utime - prev_utime_) * 1e-6;
+    const double dt = (static_cast<double>(pose.utime) - static_cast<double>(prev_utime_)) * 1e-6;
     if (!filter_.update(pose.position, dt, r, config_.acceleration_sigma, config_.max_innovation_m)) {
       filter_.reset(pose.position, pose.velocity);
       ++stats_.filter_resets;
@@ -504,6 +527,7 @@ RoadTrackerConfig RoadTrackerConfig::fromYaml(const YAML::Node& n) {
   readKey(n, "wrong_way_time_s", c.wrong_way_time_s);
   readKey(n, "pose_gap_s", c.pose_gap_s);
   readKey(n, "max_innovation_m", c.max_innovation_m);
+  readKey(n, "time_jump_s", c.time_jump_s);
   return c;
 }
 

@@ -12,6 +12,7 @@
 //   car crossed the ROI boundary, not up to a pose interval later.
 #pragma once
 
+#include "core/geo/time_order.h"
 #include "core/skeleton/skeleton.h"
 
 #include <yaml-cpp/yaml.h>
@@ -77,6 +78,10 @@ struct RoadTrackerConfig {
   double wrong_way_time_s = 0.5;       // ... for this long (and two poses) -> wrong way
   double pose_gap_s = 1.0;             // no valid pose for longer -> pose lost
   double max_innovation_m = 30.0;      // a jump larger than this restarts the filter
+  // Poses whose time goes back by more than this (3 in a row, increasing: a log restarted, a
+  // receiver's clock reset) restart the tracking: POSE_LOST for the current road, then as new.
+  // A single older pose, or one less far back, is out of order and ignored.
+  double time_jump_s = 1.0;
 
   // The keys present in `node` (config/road_tracker.yaml `tracker:`), defaults for the others.
   static RoadTrackerConfig fromYaml(const YAML::Node& node);
@@ -100,6 +105,8 @@ class RoadTracker {
 
   struct Stats {
     int64_t poses = 0, invalid = 0, out_of_order = 0, filter_resets = 0, events = 0, rematches = 0;
+    int64_t duplicates = 0;  // same utime as the last pose: ignored
+    int64_t time_jumps = 0;  // restarts after a time jump backwards
   };
   const Stats& stats() const { return stats_; }
 
@@ -128,6 +135,8 @@ class RoadTracker {
   void reachIntersection(int64_t intersection_id, const PoseInput& pose, double s_cross,
                          const std::string& detail, std::vector<RoadEvent>& events);
   RoadEvent makeEvent(RoadEventType type, const PoseInput& pose, int64_t road_id) const;
+  // POSE_LOST for the current road (detail: why), and the tracking state back to searching.
+  void losePose(const PoseInput& pose, const std::string& detail, std::vector<RoadEvent>& events);
   // Interpolates the crossing of arc length s_cross on `road` between the last and this pose.
   void interpolateCrossing(RoadEvent& e, int64_t road, double s_cross) const;
 
@@ -150,6 +159,7 @@ class RoadTracker {
   bool filter_ready_ = false;
   Filter filter_;
   int64_t last_utime_ = 0;
+  geo::TimeOrder order_;
   int64_t last_valid_utime_ = 0;
   bool have_last_valid_ = false;
   bool lost_reported_ = false;

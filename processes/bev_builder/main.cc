@@ -168,6 +168,9 @@ class BevBuilderApp {
     c.set("poses_received", s.poses_received);
     c.set("poses_invalid", s.poses_invalid);
     c.set("poses_out_of_order", s.poses_out_of_order);
+    c.set("poses_duplicate", s.poses_duplicate);
+    c.set("pose_time_jumps", s.pose_time_jumps);
+    c.set("frames_time_jump", s.frames_time_jump);
     c.set("sweeps_received", s.sweeps_received);
     c.set("sweeps_meshed", s.sweeps_meshed);
     c.set("sweeps_no_pose", s.sweeps_no_pose);

@@ -45,6 +45,8 @@ class RoadTrackerApp {
     const auto& stats = tracker_.stats();
     counters.set("poses_invalid", stats.invalid);
     counters.set("poses_out_of_order", stats.out_of_order);
+    counters.set("poses_duplicate", stats.duplicates);
+    counters.set("pose_time_jumps", stats.time_jumps);
     counters.set("filter_resets", stats.filter_resets);
     counters.set("rematches", stats.rematches);
     counters.set("current_road", tracker_.currentRoad());

@@ -496,6 +496,7 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
   // or light of its own: the camera sees the paint only), referenced by the lanelet it ends.
   std::map<int64_t, int64_t> marking_of_stop_line;  // line id -> regulatory element id
   for (const auto& ll : map.lanelets) {
+    if (!options.stop_line_road_markings) break;
     if (ll.stop_line_id && !marking_of_stop_line.count(*ll.stop_line_id)) {
       marking_of_stop_line[*ll.stop_line_id] = ids.next_free++;
     }
@@ -533,7 +534,7 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
     member(ids.way_of_line.at(ll.right_id), "right");
     const auto centre = centre_way_of_lanelet.find(ll.id);
     if (centre != centre_way_of_lanelet.end()) member(centre->second, "centerline");
-    if (ll.stop_line_id) {
+    if (ll.stop_line_id && options.stop_line_road_markings) {
       rel_xml += "    <member type=\"relation\" ref=\"" + std::to_string(marking_of_stop_line.at(*ll.stop_line_id)) +
                  "\" role=\"regulatory_element\"/>\n";
     }
@@ -650,6 +651,7 @@ void writeAutowareMapFolder(const LaneMap& map, const std::string& dir, const La
   Lanelet2WriteOptions o = options;
   o.write_projector_info = true;
   o.turn_direction_tags = true;
+  o.stop_line_road_markings = true;
   writeLanelet2(map, (std::filesystem::path(dir) / "lanelet2_map.osm").string(), o);
 }
 

@@ -59,6 +59,12 @@ struct Lanelet2WriteOptions {
   // the tag (one unknown_tags warning per intersection lanelet), so a plain map leaves it out (the
   // sidecar keeps the model's turn); writeAutowareMapFolder writes it.
   bool turn_direction_tags = false;
+  // Each stop line as the `refers` member of Autoware's regulatory element subtype=road_marking,
+  // referenced by the lanelet it ends. Plain Lanelet2 implements no road_marking (its loader
+  // reports an error per element and per lanelet referencing one), and none of the elements it
+  // has fits a stop line alone (a traffic sign or light needs its sign, right of way the priority
+  // of the roads); so only Autoware's folder layout writes them.
+  bool stop_line_road_markings = false;
   std::string location = "urban";  // `location` of every lanelet (urban, nonurban, private)
   // `speed_limit` (km/h) of a road's lanelets: OSM maxspeed by lanelet road_id (speedLimitsKmh),
   // else this default (40 km/h = 25 mph, the US residential default; intersection lanelets take
@@ -97,7 +103,7 @@ Lanelet2Document toLanelet2Document(const map::LaneMap& map, const Lanelet2Write
 // frame of lanemap, GeographicLib's LocalCartesian), vertical_datum WGS84, map_origin lat/lon/alt.
 std::string autowareProjectorInfo(const map::LaneMap& map);
 // Autoware's map folder layout: DIR/lanelet2_map.osm (+ its sidecar) and DIR/map_projector_info.yaml,
-// with turn_direction_tags set.
+// with turn_direction_tags and stop_line_road_markings set.
 void writeAutowareMapFolder(const map::LaneMap& map, const std::string& dir,
                             const Lanelet2WriteOptions& options = {});
 

@@ -239,13 +239,7 @@ TEST(Lanelet2, WrittenFileFollowsLanelet2Rules) {
   EXPECT_GT(s.nodes, 0u);
   EXPECT_EQ(s.nodes_with_ele, s.nodes);
   EXPECT_EQ(s.ways, 6u + 3u);  // 6 line strings + 3 centre lines
-  EXPECT_EQ(s.relations, 3u + 1u);  // 3 lanelets + the stop line's road_marking regulatory element
-  // Lanelet 101 ends at stop line 6: it references a road_marking that refers to the stop line.
-  const int64_t reg = s.relation_members.at(101).at("regulatory_element");
-  EXPECT_EQ(s.relation_tags.at(reg).at("type"), "regulatory_element");
-  EXPECT_EQ(s.relation_tags.at(reg).at("subtype"), "road_marking");
-  EXPECT_EQ(s.relation_members.at(reg).at("refers"), 6);
-  EXPECT_EQ(s.relation_members.at(100).count("regulatory_element"), 0u);
+  EXPECT_EQ(s.relations, 3u);  // no regulatory element: plain Lanelet2 has none for a bare stop line
   // Successors share nodes: line 1 ends where line 4 starts, line 2 where line 5 starts.
   EXPECT_EQ(s.way_nodes.at(1).back(), s.way_nodes.at(4).front());
   EXPECT_EQ(s.way_nodes.at(2).back(), s.way_nodes.at(5).front());
@@ -645,8 +639,8 @@ TEST(Lanelet2, WritesOnlyTagsLanelet2Knows) {
   const std::set<std::string> line_types{"curbstone", "line_thin", "stop_line", "virtual"};
   for (const auto& v : t.ways.at("type")) EXPECT_TRUE(line_types.count(v)) << "line type " << v;
   EXPECT_EQ(t.ways.at("type").count("centerline"), 0u);
-  EXPECT_EQ(t.relations.at("subtype"), (std::set<std::string>{"road", "road_marking"}));
-  EXPECT_EQ(t.relations.at("type"), (std::set<std::string>{"lanelet", "regulatory_element"}));
+  EXPECT_EQ(t.relations.at("subtype"), (std::set<std::string>{"road"}));
+  EXPECT_EQ(t.relations.at("type"), (std::set<std::string>{"lanelet"}));
   EXPECT_EQ(t.relations.at("location"), std::set<std::string>{"urban"});
   EXPECT_EQ(t.relations.at("one_way"), std::set<std::string>{"yes"});
   EXPECT_EQ(t.nodes.count("local_x"), 0u);
@@ -763,6 +757,12 @@ TEST(Lanelet2, AutowareTagsLaneChangeSpeedLimitTurnDirection) {
   EXPECT_EQ(s.relation_tags.at(102).at("turn_direction"), "straight");
   EXPECT_EQ(s.relation_tags.at(103).at("turn_direction"), "left");
   EXPECT_EQ(s.relation_tags.at(100).count("turn_direction"), 0u);
+  // Lanelet 101 ends at stop line 6: it references Autoware's road_marking that refers to it.
+  const int64_t reg = s.relation_members.at(101).at("regulatory_element");
+  EXPECT_EQ(s.relation_tags.at(reg).at("type"), "regulatory_element");
+  EXPECT_EQ(s.relation_tags.at(reg).at("subtype"), "road_marking");
+  EXPECT_EQ(s.relation_members.at(reg).at("refers"), 6);
+  EXPECT_EQ(s.relation_members.at(100).count("regulatory_element"), 0u);
   // The model's turn comes back, not the derived one.
   const LaneMap back = readLanelet2(path, 49.0, 8.4);
   EXPECT_EQ(back.lanelet(103)->turn, TurnDirection::kNone);

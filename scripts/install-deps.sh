@@ -2,7 +2,8 @@
 # Installs the Debian packages lanemap needs, only when something is missing (idempotent).
 # Usage: scripts/install-deps.sh [PACKAGE ...]   (as root, or with sudo available)
 # Without arguments: lanemap's build and test packages; with arguments: those packages instead
-# (scripts/install-train-deps.sh uses this for the training tools).
+# (scripts/install-train-deps.sh uses this for the training tools). The last line's packages are for
+# Lanelet2's own checks (../shared/tools/lanelet2/build.sh, run by tests/lanelet2_tools).
 set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config git
@@ -11,6 +12,7 @@ PACKAGES=(
   libgeographiclib-dev libpcl-dev libv4l-dev libosmium2-dev libprotozero-dev libbz2-dev zlib1g-dev libexpat1-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev
   osmium-tool iproute2 util-linux
+  libboost-filesystem-dev libboost-serialization-dev libboost-program-options-dev libpugixml-dev
 )
 if [ $# -gt 0 ]; then PACKAGES=("$@"); fi
 missing=()

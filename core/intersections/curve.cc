@@ -82,16 +82,8 @@ ConnectionCurve connectionCurve(const Vector2d& p0, const Vector2d& t0_in, const
   return c;
 }
 
-namespace {
-
-// A bound from p0 (heading t0) to p2 (heading t2). Where the two tangent lines meet in front of
-// both ends (the quadratic case of connectionCurve), a straight piece, a circular arc and a
-// straight piece: the arc's tangent length is the shorter leg, so its radius is the largest any
-// curve between the two tangent lines can keep everywhere (a quadratic Bezier on the same legs
-// turns up to 1.4 times tighter at its apex, and much tighter near the end of a short leg: the
-// curvature Lanelet2's validator flags above 0.5 1/m). Else connectionCurve's cubic.
-std::vector<Vector2d> boundCurve(const Vector2d& p0, const Vector2d& t0_in, const Vector2d& p2, const Vector2d& t2_in,
-                                 const CurveOptions& o) {
+std::vector<Vector2d> connectionPolyline(const Vector2d& p0, const Vector2d& t0_in, const Vector2d& p2,
+                                         const Vector2d& t2_in, const CurveOptions& o) {
   const ConnectionCurve c = connectionCurve(p0, t0_in, p2, t2_in, o);
   if (!c.quadratic) return c.sample(o.step_m);
   const Vector2d t0 = unit(c.control[1] - p0, Vector2d::UnitX());
@@ -124,14 +116,12 @@ std::vector<Vector2d> boundCurve(const Vector2d& p0, const Vector2d& t0_in, cons
   return out;
 }
 
-}  // namespace
-
 ConnectorBounds connectorBounds(const Vector2d& left0, const Vector2d& right0, const Vector2d& t0,
                                 const Vector2d& left2, const Vector2d& right2, const Vector2d& t2,
                                 const CurveOptions& o) {
   ConnectorBounds b;
-  b.left = boundCurve(left0, t0, left2, t2, o);
-  b.right = boundCurve(right0, t0, right2, t2, o);
+  b.left = connectionPolyline(left0, t0, left2, t2, o);
+  b.right = connectionPolyline(right0, t0, right2, t2, o);
   return b;
 }
 

@@ -1,8 +1,8 @@
 // Lanelet2 OSM <-> map::LaneMap. The writer produces a file Lanelet2's own loader reads without
-// errors and that Lanelet2's validator (lanelet2_validate) accepts without a warning: only tags
-// Lanelet2 knows (positive ids, lat/lon with 10 decimals, `ele` on every node, typed line strings,
-// lanelet relations with left/right members); the reader reads any Lanelet2 map (ours or someone
-// else's, e.g. the Lanelet2 project's Karlsruhe example) with libosmium.
+// errors, with only tags and values Lanelet2's validator (lanelet2_validate) knows (positive ids,
+// lat/lon with 10 decimals, `ele` on every node, typed line strings, lanelet relations with
+// left/right members); the reader reads any Lanelet2 map (ours or someone else's, e.g. the
+// Lanelet2 project's Karlsruhe example) with libosmium.
 //
 // Conventions (see also writeLanelet2/readLanelet2 below):
 // - lanemap's own metadata (a lanelet's kind, road_id, from/to node, intersection id, lane index,
@@ -18,9 +18,10 @@
 //   they agree with lat/lon in the reader's frame.
 // - Points closer than 5 cm (Lanelet2's points_too_close limit) are one node in the file.
 // - Lanelet2 has no successor tags; successors are recovered from shared end/start points.
-// - Stop lines are ways type=stop_line; the lanelet that ends at one names it in the sidecar. The
+// - Stop lines are ways type=stop_line; the lanelet that ends at one names it in the sidecar (and
+//   in Autoware's layout references a road_marking regulatory element referring to it). The
 //   reader also takes a stop line from a regulatory element's `ref_line` member (traffic lights,
-//   right of way) in foreign maps.
+//   right of way) or a road_marking's `refers` in foreign maps.
 // - The centre line is written as a way (type=virtual) with member role `centerline`, which
 //   Lanelet2 loads as the lanelet's centreline; without it the reader averages the two bounds.
 // - Autoware's tags: `lane_change` (yes on a dashed line between two same-direction lanes, no on

@@ -2,7 +2,8 @@
 # Installs the Debian packages lanemap needs, only when something is missing (idempotent).
 # Usage: scripts/install-deps.sh [PACKAGE ...]   (as root, or with sudo available)
 # Without arguments: lanemap's build and test packages; with arguments: those packages instead
-# (scripts/install-train-deps.sh uses this for the training tools).
+# (scripts/install-train-deps.sh uses this for the training tools). The last line's packages are for
+# Lanelet2's own checks (../shared/tools/lanelet2/build.sh, run by tests/lanelet2_tools).
 set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config git
@@ -13,6 +14,7 @@ PACKAGES=(
   osmium-tool iproute2 util-linux
   chromium chromium-driver                # the viewer's browser test (tests/viewer/browser_test.cc)
   clang libclang-rt-14-dev                # fuzz/: libFuzzer with ASan + UBSan (make fuzz)
+  libboost-filesystem-dev libboost-serialization-dev libboost-program-options-dev libpugixml-dev  # Lanelet2's checks
 )
 # npm bundles the viewer's page at build time (web/viewer); a Node.js from elsewhere (NodeSource's
 # nodejs ships its own npm and conflicts with Debian's) is kept.

@@ -8,6 +8,7 @@
 // Everything is checked (OSM, route) before anything is written; output goes to a temporary
 // folder renamed into place at the end, so a failed run leaves nothing behind.
 #include "core/io/lanelet2.h"
+#include "core/io/speed_limits.h"
 #include "core/map/simplify.h"
 #include "core/io/map_png.h"
 #include "core/io/road_osm_writer.h"
@@ -204,6 +205,7 @@ int main(int argc, char** argv) {
     for (const auto& m : misread) std::fprintf(stderr, "lanemap-sim: warning: %s\n", m.c_str());
     io::Lanelet2WriteOptions truth_options;
     truth_options.check_orientation = misread.empty();
+    truth_options.speed_limit_kmh_by_road = io::speedLimitsKmh(sk);
     io::writeLanelet2(truth_written, (tmp / "groundtruth.osm").string(), truth_options);
     io::RoadOsmOptions road_options;
     road_options.keep_lane_tags = keep_lane_tags;

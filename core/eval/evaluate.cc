@@ -1,5 +1,6 @@
 // Map evaluation (see evaluate.h for every definition).
 #include "core/eval/evaluate.h"
+#include "core/io/lanelet2.h"
 
 #include "core/eval/geometry.h"
 
@@ -624,6 +625,8 @@ std::string summary(const EvalReport& r) {
 }
 
 geo::LatLonAlt lanelet2Origin(const std::string& path) {
+  // lanemap's files: the writer's origin, from the map's sidecar (core/io/lanelet2.h).
+  if (const auto o = io::lanelet2WriterOrigin(path)) return {o->lat, o->lon, 0.0};
   osmium::io::Reader reader(path, osmium::osm_entity_bits::node);
   while (osmium::memory::Buffer buffer = reader.read()) {
     for (const auto& node : buffer.select<osmium::Node>()) {

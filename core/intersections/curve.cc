@@ -82,12 +82,46 @@ ConnectionCurve connectionCurve(const Vector2d& p0, const Vector2d& t0_in, const
   return c;
 }
 
+std::vector<Vector2d> connectionPolyline(const Vector2d& p0, const Vector2d& t0_in, const Vector2d& p2,
+                                         const Vector2d& t2_in, const CurveOptions& o) {
+  const ConnectionCurve c = connectionCurve(p0, t0_in, p2, t2_in, o);
+  if (!c.quadratic) return c.sample(o.step_m);
+  const Vector2d t0 = unit(c.control[1] - p0, Vector2d::UnitX());
+  const Vector2d t2 = unit(p2 - c.control[1], t0);
+  const double a = (c.control[1] - p0).norm(), b = (p2 - c.control[1]).norm();
+  const double turn = std::atan2(cross(t0, t2), t0.dot(t2));  // signed, |turn| < pi
+  const double tangent = std::min(a, b);
+  const double radius = tangent / std::tan(0.5 * std::abs(turn));
+  const Vector2d start = c.control[1] - tangent * t0;  // where the arc begins and ends
+  const Vector2d end = c.control[1] + tangent * t2;
+  const Vector2d normal = turn > 0 ? Vector2d(-t0.y(), t0.x()) : Vector2d(t0.y(), -t0.x());
+  const Vector2d centre = start + radius * normal;
+  const double step = std::max(1e-3, o.step_m);
+  std::vector<Vector2d> out;
+  const auto straight = [&](const Vector2d& from, const Vector2d& to) {
+    const int n = std::max(1, static_cast<int>(std::ceil((to - from).norm() / step)));
+    for (int i = 0; i < n; ++i) out.push_back(from + (to - from) * (static_cast<double>(i) / n));
+  };
+  if ((start - p0).norm() > 1e-9) straight(p0, start);
+  const int n = std::max(2, static_cast<int>(std::ceil(radius * std::abs(turn) / step)));
+  const Vector2d r0 = start - centre;
+  for (int i = 0; i < n; ++i) {
+    const double ang = turn * static_cast<double>(i) / n;
+    out.push_back(centre + Vector2d(std::cos(ang) * r0.x() - std::sin(ang) * r0.y(),
+                                    std::sin(ang) * r0.x() + std::cos(ang) * r0.y()));
+  }
+  if ((p2 - end).norm() > 1e-9) straight(end, p2);
+  out.push_back(p2);
+  out.front() = p0;
+  return out;
+}
+
 ConnectorBounds connectorBounds(const Vector2d& left0, const Vector2d& right0, const Vector2d& t0,
                                 const Vector2d& left2, const Vector2d& right2, const Vector2d& t2,
                                 const CurveOptions& o) {
   ConnectorBounds b;
-  b.left = connectionCurve(left0, t0, left2, t2, o).sample(o.step_m);
-  b.right = connectionCurve(right0, t0, right2, t2, o).sample(o.step_m);
+  b.left = connectionPolyline(left0, t0, left2, t2, o);
+  b.right = connectionPolyline(right0, t0, right2, t2, o);
   return b;
 }
 

@@ -38,7 +38,17 @@ ConnectionCurve connectionCurve(const Eigen::Vector2d& p0, const Eigen::Vector2d
                                 const Eigen::Vector2d& p2, const Eigen::Vector2d& t2,
                                 const CurveOptions& options = {});
 
-// The two bounds of an intersection lanelet, each its own connection curve: from the in-lane's
+// The connection as a polyline with points every step_m at most (ends exact). Where the two
+// tangent lines meet in front of both ends (connectionCurve's quadratic case): a straight piece,
+// a circular arc and a straight piece, the arc's tangent length being the shorter leg, so its
+// radius is the largest any curve between the two tangent lines can keep everywhere (a quadratic
+// Bezier on the same legs turns up to 1.4 times tighter at its apex and much tighter near the end
+// of a short leg: the curvature Lanelet2's validator flags above 0.5 1/m). Else the cubic, sampled.
+std::vector<Eigen::Vector2d> connectionPolyline(const Eigen::Vector2d& p0, const Eigen::Vector2d& t0,
+                                                const Eigen::Vector2d& p2, const Eigen::Vector2d& t2,
+                                                const CurveOptions& options = {});
+
+// The two bounds of an intersection lanelet, each its own connectionPolyline: from the in-lane's
 // bound end points (left0, right0), leaving with heading t0, to the out-lane's bound start points
 // (left2, right2), arriving with heading t2. They meet the road lanelets' bounds exactly and never
 // loop back, which offsets of a tight centre curve do wherever the offset exceeds the curve's

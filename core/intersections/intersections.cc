@@ -365,7 +365,9 @@ class Builder {
     const LaneEnd& to = d.lanes[o];
     const ConnectionCurve curve =
         connectionCurve(from.centre.head<2>(), from.tangent, to.centre.head<2>(), to.tangent, o_.curve);
-    const std::vector<Vector2d> pts = curve.sample(o_.curve.step_m);
+    // The same construction as the bounds' (connectionPolyline), so the centre stays between them.
+    const std::vector<Vector2d> pts =
+        connectionPolyline(from.centre.head<2>(), from.tangent, to.centre.head<2>(), to.tangent, o_.curve);
     const ConnectorBounds bounds = connectorBounds(from.left.head<2>(), from.right.head<2>(), from.tangent,
                                                    to.left.head<2>(), to.right.head<2>(), to.tangent, o_.curve);
     // Heights run linearly in arc length from the in-lane's end to the out-lane's start.

@@ -3,6 +3,7 @@
 #include "core/io/lanelet2.h"
 #include "core/io/xml_escape.h"
 
+#include <nlohmann/json.hpp>
 #include <osmium/handler.hpp>
 #include <osmium/io/reader.hpp>
 #include <osmium/io/xml_input.hpp>
@@ -16,7 +17,9 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <functional>
+#include <regex>
 #include <set>
 #include <unordered_map>
 #include <unordered_set>
@@ -30,7 +33,10 @@ using map::TurnDirection;
 
 namespace {
 
-constexpr double kNodeMergeDistanceM = 1e-3;   // writer: points closer than 1 mm share a node
+constexpr double kNodeMergeDistanceM = 0.05;   // writer: points closer than 5 cm share a node
+                                               // (Lanelet2's points_too_close limit)
+constexpr int kSidecarVersion = 1;
+constexpr double kStraightTurnRad = 0.5236;    // turn_direction: heading change under 30 deg
 constexpr double kSuccessorDistanceM = 1e-2;   // reader: end/start points closer than 1 cm meet
 constexpr double kLocalXyAgreementM = 0.05;    // local_x/y vs lat/lon: osmium keeps 1e-7 deg
                                                // (<= 1.1 cm); 5 cm leaves margin, an origin
@@ -181,7 +187,12 @@ class NodeTable {
         }
       }
     }
-    cells_[key(cx, cy)].push_back(points_.size());
+    return add(p);
+  }
+
+  // A node of its own for p, merged with none (a line shorter than the merge distance keeps 2).
+  int64_t add(const Eigen::Vector3d& p) {
+    cells_[key(cellOf(p.x()), cellOf(p.y()))].push_back(points_.size());
     points_.push_back(p);
     ids_.push_back(next_id_);
     return next_id_++;
@@ -295,13 +306,15 @@ void appendTag(std::string& out, const std::string& k, const std::string& v) {
   out += "    <tag k=\"" + escapeXml(k) + "\" v=\"" + escapeXml(v) + "\"/>\n";
 }
 
-// A way's node ids, without consecutive repeats (points < 1 mm apart collapse into one node).
+// A way's node ids, without consecutive repeats (points < 5 cm apart collapse into one node). A
+// line of 2 or more points keeps 2 nodes at least: its last point gets a node of its own.
 std::vector<int64_t> wayNodes(NodeTable& nodes, const std::vector<Eigen::Vector3d>& pts) {
   std::vector<int64_t> refs;
   for (const auto& p : pts) {
     const int64_t id = nodes.idFor(p);
     if (refs.empty() || refs.back() != id) refs.push_back(id);
   }
+  if (refs.size() == 1 && pts.size() >= 2) refs.push_back(nodes.add(pts.back()));
   return refs;
 }
 
@@ -364,8 +377,110 @@ std::vector<Eigen::Vector3d> laneletOutline(const LaneMap& map, const map::Lanel
 
 // ---------------------------------------------------------------- writer
 
-std::string toLanelet2Xml(const LaneMap& map, const Lanelet2WriteOptions& options,
-                          const std::string& name) {
+namespace {
+
+uint64_t fnv1a64(std::string_view bytes) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+std::string hex64(uint64_t v) {
+  char buf[17];
+  std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+double roundTo(double v, double step) { return std::round(v / step) * step; }
+
+// The turn of an intersection lanelet from its centre line: the heading change between its first
+// and last 2 m (straight below 30 degrees); kNone when the centre is too short to tell.
+TurnDirection turnFromCentre(const std::vector<Eigen::Vector3d>& c) {
+  if (c.size() < 2 || polylineLength(c) < 0.5) return TurnDirection::kNone;
+  const auto direction = [&](bool at_start) {
+    Eigen::Vector2d d = Eigen::Vector2d::Zero();
+    double len = 0.0;
+    for (size_t k = 1; k < c.size() && len < 2.0; ++k) {
+      const size_t i = at_start ? k - 1 : c.size() - 1 - k;
+      const Eigen::Vector2d seg = (c[i + 1] - c[i]).head<2>();
+      d += seg;
+      len += seg.norm();
+    }
+    return d;
+  };
+  const Eigen::Vector2d a = direction(true), b = direction(false);
+  if (a.norm() <= 0.0 || b.norm() <= 0.0) return TurnDirection::kNone;
+  const double turn = std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+  if (std::abs(turn) < kStraightTurnRad) return TurnDirection::kStraight;
+  return turn > 0.0 ? TurnDirection::kLeft : TurnDirection::kRight;
+}
+
+std::string formatSpeed(double kmh) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.0f", std::max(1.0, kmh));
+  return buf;
+}
+
+// `lane_change` of the lines shared by two lanes of one direction (the right bound of one is the
+// left bound of the other): yes on a dashed line, no on any other; nothing on other lines.
+std::unordered_map<int64_t, bool> laneChangeOfSharedLines(const LaneMap& map) {
+  std::unordered_map<int64_t, int> as_left, as_right;
+  for (const auto& ll : map.lanelets) {
+    ++as_left[ll.left_id];
+    ++as_right[ll.right_id];
+  }
+  std::unordered_map<int64_t, bool> out;
+  for (const auto& l : map.lines) {
+    if (l.type == LineType::kStopLine) continue;
+    if (as_left.count(l.id) && as_right.count(l.id)) out[l.id] = l.type == LineType::kDashed;
+  }
+  return out;
+}
+
+double speedLimitOf(const map::Lanelet& ll, const LaneMap& map, const Lanelet2WriteOptions& o) {
+  const auto& by_road = o.speed_limit_kmh_by_road;
+  if (const auto it = by_road.find(ll.road_id); ll.road_id >= 0 && it != by_road.end()) return it->second;
+  if (ll.kind != LaneletKind::kIntersection || by_road.empty()) return o.default_speed_limit_kmh;
+  // An intersection lanelet: the slower of the roads it joins (predecessor and successors).
+  double v = std::numeric_limits<double>::infinity();
+  const auto consider = [&](const map::Lanelet& other) {
+    const auto it = by_road.find(other.road_id);
+    if (other.road_id >= 0 && it != by_road.end()) v = std::min(v, it->second);
+  };
+  for (const auto& other : map.lanelets) {
+    if (std::find(other.successors.begin(), other.successors.end(), ll.id) != other.successors.end()) consider(other);
+  }
+  for (int64_t s : ll.successors) {
+    if (const auto* other = map.lanelet(s)) consider(*other);
+  }
+  return std::isfinite(v) ? v : o.default_speed_limit_kmh;
+}
+
+}  // namespace
+
+std::optional<double> parseMaxspeedKmh(const std::string& value) {
+  static const std::regex re(R"(^\s*([0-9]+(?:\.[0-9]+)?)\s*(km/h|kmh|kph|mph|knots)?\s*$)");
+  std::smatch m;
+  if (!std::regex_match(value, m, re)) return std::nullopt;
+  const double v = std::stod(m[1].str());
+  if (!(v > 0.0)) return std::nullopt;
+  const std::string unit = m[2].str();
+  if (unit == "mph") return v * 1.609344;
+  if (unit == "knots") return v * 1.852;
+  return v;
+}
+
+std::string lanelet2SidecarPath(const std::string& osm_path) {
+  const std::filesystem::path p(osm_path);
+  if (p.extension() == ".osm") return (p.parent_path() / (p.stem().string() + ".lanemap.json")).string();
+  return osm_path + ".lanemap.json";
+}
+
+Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptions& options,
+                                    const std::string& name) {
   validateForWriting(map, options, name);
   const geo::LocalFrame frame({map.origin_lat, map.origin_lon, map.origin_alt});
   IdPlan ids = planIds(map);
@@ -377,25 +492,41 @@ std::string toLanelet2Xml(const LaneMap& map, const Lanelet2WriteOptions& option
       if (ll.centre.size() >= 2) centre_way_of_lanelet[ll.id] = ids.next_free++;
     }
   }
-  NodeTable nodes(ids.next_free);
+  // A stop line becomes Autoware's `road_marking` regulatory element (a stop line with no sign
+  // or light of its own: the camera sees the paint only), referenced by the lanelet it ends.
+  std::map<int64_t, int64_t> marking_of_stop_line;  // line id -> regulatory element id
+  for (const auto& ll : map.lanelets) {
+    if (!options.stop_line_road_markings) break;
+    if (ll.stop_line_id && !marking_of_stop_line.count(*ll.stop_line_id)) {
+      marking_of_stop_line[*ll.stop_line_id] = ids.next_free++;
+    }
+  }
+  const int64_t first_node_id = ids.next_free;
+  NodeTable nodes(first_node_id);
+  const auto lane_change = laneChangeOfSharedLines(map);
 
   std::string ways_xml;
   for (const auto& line : map.lines) {
     const OsmLineTags t = osmTagsOf(line.type);
     std::vector<std::pair<std::string, std::string>> tags{{"type", t.type}};
     if (t.subtype) tags.emplace_back("subtype", t.subtype);
+    if (const auto it = lane_change.find(line.id); it != lane_change.end()) {
+      tags.emplace_back("lane_change", it->second ? "yes" : "no");
+    }
     appendWay(ways_xml, ids.way_of_line.at(line.id), wayNodes(nodes, line.points), tags);
   }
   for (const auto& ll : map.lanelets) {
     const auto it = centre_way_of_lanelet.find(ll.id);
     if (it == centre_way_of_lanelet.end()) continue;
-    appendWay(ways_xml, it->second, wayNodes(nodes, ll.centre), {{"type", "centerline"}});
+    // type=virtual: Lanelet2 knows no `centerline` type; the member role makes it the centre line.
+    appendWay(ways_xml, it->second, wayNodes(nodes, ll.centre), {{"type", "virtual"}});
   }
 
+  nlohmann::ordered_json lanelets_json = nlohmann::ordered_json::object();
   std::string rel_xml;
   for (const auto& ll : map.lanelets) {
-    rel_xml += "  <relation id=\"" + std::to_string(ids.relation_of_lanelet.at(ll.id)) +
-               "\" version=\"1\" visible=\"true\">\n";
+    const int64_t rel_id = ids.relation_of_lanelet.at(ll.id);
+    rel_xml += "  <relation id=\"" + std::to_string(rel_id) + "\" version=\"1\" visible=\"true\">\n";
     const auto member = [&](int64_t way, const char* role) {
       rel_xml += "    <member type=\"way\" ref=\"" + std::to_string(way) + "\" role=\"" + role + "\"/>\n";
     };
@@ -403,49 +534,125 @@ std::string toLanelet2Xml(const LaneMap& map, const Lanelet2WriteOptions& option
     member(ids.way_of_line.at(ll.right_id), "right");
     const auto centre = centre_way_of_lanelet.find(ll.id);
     if (centre != centre_way_of_lanelet.end()) member(centre->second, "centerline");
+    if (ll.stop_line_id && options.stop_line_road_markings) {
+      rel_xml += "    <member type=\"relation\" ref=\"" + std::to_string(marking_of_stop_line.at(*ll.stop_line_id)) +
+                 "\" role=\"regulatory_element\"/>\n";
+    }
     appendTag(rel_xml, "type", "lanelet");
     appendTag(rel_xml, "subtype", "road");
-    appendTag(rel_xml, "location", "urban");
+    appendTag(rel_xml, "location", options.location);
     appendTag(rel_xml, "one_way", "yes");
-    if (const char* turn = turnTag(ll.turn)) appendTag(rel_xml, "turn_direction", turn);
-    appendTag(rel_xml, "lanemap:kind", ll.kind == LaneletKind::kIntersection ? "intersection" : "road");
-    appendTag(rel_xml, "lanemap:road_id", std::to_string(ll.road_id));
-    appendTag(rel_xml, "lanemap:from_node", std::to_string(ll.from_node));
-    appendTag(rel_xml, "lanemap:to_node", std::to_string(ll.to_node));
-    appendTag(rel_xml, "lanemap:intersection_id", std::to_string(ll.intersection_id));
-    appendTag(rel_xml, "lanemap:index_from_left", std::to_string(ll.index_from_left));
-    if (ll.stop_line_id) {
-      appendTag(rel_xml, "lanemap:stop_line", std::to_string(ids.way_of_line.at(*ll.stop_line_id)));
-    }
+    appendTag(rel_xml, "speed_limit", formatSpeed(speedLimitOf(ll, map, options)));
+    TurnDirection turn = ll.turn;
+    if (turn == TurnDirection::kNone && ll.kind == LaneletKind::kIntersection) turn = turnFromCentre(ll.centre);
+    if (const char* t = turnTag(turn); t && options.turn_direction_tags) appendTag(rel_xml, "turn_direction", t);
+    rel_xml += "  </relation>\n";
+
+    nlohmann::ordered_json j;
+    j["kind"] = ll.kind == LaneletKind::kIntersection ? "intersection" : "road";
+    j["road_id"] = ll.road_id;
+    j["from_node"] = ll.from_node;
+    j["to_node"] = ll.to_node;
+    j["intersection_id"] = ll.intersection_id;
+    j["index_from_left"] = ll.index_from_left;
+    if (ll.turn != TurnDirection::kNone) j["turn"] = turnTag(ll.turn);
+    if (ll.stop_line_id) j["stop_line"] = ids.way_of_line.at(*ll.stop_line_id);
+    lanelets_json[std::to_string(rel_id)] = std::move(j);
+  }
+
+  for (const auto& [line_id, reg_id] : marking_of_stop_line) {
+    rel_xml += "  <relation id=\"" + std::to_string(reg_id) + "\" version=\"1\" visible=\"true\">\n";
+    rel_xml += "    <member type=\"way\" ref=\"" + std::to_string(ids.way_of_line.at(line_id)) + "\" role=\"refers\"/>\n";
+    appendTag(rel_xml, "type", "regulatory_element");
+    appendTag(rel_xml, "subtype", "road_marking");
     rel_xml += "  </relation>\n";
   }
 
-  std::string out;
-  out.reserve(ways_xml.size() + rel_xml.size() + nodes.size() * 260 + 256);
+  Lanelet2Document doc;
+  std::string& out = doc.osm;
+  out.reserve(ways_xml.size() + rel_xml.size() + nodes.size() * 200 + 256);
   out += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   out += "<osm version=\"0.6\" generator=\"lanemap\">\n";
+  std::vector<double> local_xy;
+  local_xy.reserve(2 * nodes.size());
   for (size_t i = 0; i < nodes.size(); ++i) {
     const Eigen::Vector3d& p = nodes.point(i);
     const geo::LatLonAlt ll = enuToLatLonEle(frame, p);
     out += "  <node id=\"" + std::to_string(nodes.id(i)) + "\" version=\"1\" visible=\"true\" lat=\"" +
            formatDouble("%.10f", ll.lat) + "\" lon=\"" + formatDouble("%.10f", ll.lon) + "\">\n";
     appendTag(out, "ele", formatDouble("%.4f", ll.alt));
-    appendTag(out, "local_x", formatDouble("%.4f", p.x()));
-    appendTag(out, "local_y", formatDouble("%.4f", p.y()));
+    if (options.local_xy_tags) {
+      appendTag(out, "local_x", formatDouble("%.4f", p.x()));
+      appendTag(out, "local_y", formatDouble("%.4f", p.y()));
+    }
     out += "  </node>\n";
+    local_xy.push_back(roundTo(p.x(), 1e-4));
+    local_xy.push_back(roundTo(p.y(), 1e-4));
   }
   out += ways_xml;
   out += rel_xml;
   out += "</osm>\n";
-  return out;
+
+  // The hash comes first: a reader looking for the sidecar of a renamed copy reads only the start.
+  nlohmann::ordered_json side;
+  side["osm_fnv1a64"] = hex64(fnv1a64(out));
+  side["osm_bytes"] = out.size();
+  side["lanemap_sidecar"] = kSidecarVersion;
+  side["about"] = "lanemap metadata of a Lanelet2 map: lanelets by relation id; the nodes' ENU x/y (m) "
+                  "in the frame of `origin`, node ids first_node_id, first_node_id + 1, ...";
+  side["origin"] = {{"lat", map.origin_lat}, {"lon", map.origin_lon}, {"alt", map.origin_alt}};
+  side["lanelets"] = std::move(lanelets_json);
+  side["first_node_id"] = first_node_id;
+  side["local_xy"] = std::move(local_xy);
+  doc.sidecar = side.dump() + "\n";
+  return doc;
+}
+
+std::string toLanelet2Xml(const LaneMap& map, const Lanelet2WriteOptions& options,
+                          const std::string& name) {
+  return toLanelet2Document(map, options, name).osm;
+}
+
+std::string autowareProjectorInfo(const LaneMap& map) {
+  return "# Autoware map projector: lanemap's ENU frame is GeographicLib's LocalCartesian at map_origin.\n"
+         "projector_type: LocalCartesian\n"
+         "vertical_datum: WGS84\n"
+         "map_origin:\n"
+         "  latitude: " + formatDouble("%.10f", map.origin_lat) + "\n"
+         "  longitude: " + formatDouble("%.10f", map.origin_lon) + "\n"
+         "  altitude: " + formatDouble("%.4f", map.origin_alt) + "\n";
 }
 
 void writeLanelet2(const LaneMap& map, const std::string& path, const Lanelet2WriteOptions& options) {
-  writeFileAtomically(path, toLanelet2Xml(map, options, path));
+  const Lanelet2Document doc = toLanelet2Document(map, options, path);
+  // The sidecar first: a crash between the two leaves the old map with a sidecar whose hash does
+  // not match it, which the reader then ignores (it never pairs a map with foreign metadata).
+  if (options.write_sidecar) {
+    writeFileAtomically(lanelet2SidecarPath(path), doc.sidecar);
+  } else {
+    std::error_code ec;  // no stale sidecar of an earlier version of the map
+    std::filesystem::remove(lanelet2SidecarPath(path), ec);
+  }
+  writeFileAtomically(path, doc.osm);
+  if (options.write_projector_info) {
+    const auto dir = std::filesystem::path(path).parent_path();
+    writeFileAtomically((dir / "map_projector_info.yaml").string(), autowareProjectorInfo(map));
+  }
 }
 
 void writeLanelet2(const LaneMap& map, const std::string& path) {
   writeLanelet2(map, path, Lanelet2WriteOptions{});
+}
+
+void writeAutowareMapFolder(const LaneMap& map, const std::string& dir, const Lanelet2WriteOptions& options) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw Lanelet2Error("cannot create map folder '" + dir + "': " + ec.message());
+  Lanelet2WriteOptions o = options;
+  o.write_projector_info = true;
+  o.turn_direction_tags = true;
+  o.stop_line_road_markings = true;
+  writeLanelet2(map, (std::filesystem::path(dir) / "lanelet2_map.osm").string(), o);
 }
 
 // ---------------------------------------------------------------- reader
@@ -612,6 +819,94 @@ struct ReadLanelet {
   std::optional<int64_t> stop_way;
 };
 
+// The sidecar of an OSM file whose bytes hash to `hash`: MAP.lanemap.json when it matches, else
+// any *.lanemap.json in the same folder that names the hash (a renamed copy of the map). Only the
+// first bytes of each candidate are read until one matches.
+struct SidecarMatch {
+  std::string path;
+  bool stale = false;  // MAP.lanemap.json exists but names another hash
+};
+
+std::string sidecarHashOf(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char buf[128] = {};
+  in.read(buf, sizeof(buf) - 1);
+  static const std::regex re(R"re(^\{"osm_fnv1a64":"([0-9a-f]{16})")re");
+  std::cmatch m;
+  if (!std::regex_search(buf, m, re)) return {};
+  return m[1].str();
+}
+
+SidecarMatch findSidecar(const std::string& osm_path, const std::string& hash) {
+  SidecarMatch match;
+  std::error_code ec;
+  const std::string own = lanelet2SidecarPath(osm_path);
+  if (std::filesystem::is_regular_file(own, ec)) {
+    if (sidecarHashOf(own) == hash) {
+      match.path = own;
+      return match;
+    }
+    match.stale = true;
+  }
+  const auto dir = std::filesystem::path(osm_path).parent_path();
+  const std::string suffix = ".lanemap.json";
+  size_t looked = 0;
+  for (std::filesystem::directory_iterator it(dir.empty() ? "." : dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= suffix.size() || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) continue;
+    if (it->path().string() == own || ++looked > 1000) continue;
+    if (sidecarHashOf(it->path().string()) == hash) {
+      match.path = it->path().string();
+      break;
+    }
+  }
+  return match;
+}
+
+std::string readAll(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// What a sidecar holds, parsed and checked.
+struct Sidecar {
+  std::string path;
+  geo::LatLonAlt origin;
+  std::unordered_map<int64_t, nlohmann::json> lanelets;
+  int64_t first_node_id = 0;
+  std::vector<double> local_xy;
+};
+
+Sidecar parseSidecar(const std::string& path, const std::string& osm_path) {
+  Sidecar side;
+  side.path = path;
+  const auto bad = [&](const std::string& what) -> Lanelet2Error {
+    return Lanelet2Error("malformed lanemap sidecar '" + path + "' of '" + osm_path + "': " + what);
+  };
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(readAll(path));
+  } catch (const std::exception& e) {
+    throw bad(e.what());
+  }
+  try {
+    if (j.value("lanemap_sidecar", 0) != kSidecarVersion) throw bad("unknown version");
+    const auto& o = j.at("origin");
+    side.origin = {o.at("lat").get<double>(), o.at("lon").get<double>(), o.at("alt").get<double>()};
+    for (const auto& [id, v] : j.at("lanelets").items()) {
+      side.lanelets[std::stoll(id)] = v;
+    }
+    side.first_node_id = j.at("first_node_id").get<int64_t>();
+    side.local_xy = j.at("local_xy").get<std::vector<double>>();
+  } catch (const Lanelet2Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw bad(e.what());
+  }
+  if (side.local_xy.size() % 2 != 0) throw bad("local_xy has an odd number of values");
+  return side;
+}
+
 class Lanelet2Reader {
  public:
   Lanelet2Reader(const std::string& path, double lat, double lon, const Lanelet2ReadOptions& options)
@@ -619,6 +914,12 @@ class Lanelet2Reader {
     out_.map.origin_lat = lat;
     out_.map.origin_lon = lon;
     out_.map.origin_alt = options.origin_alt;
+    const SidecarMatch match = findSidecar(path, hex64(fnv1a64(readAll(path))));
+    out_.stale_sidecar = match.stale && match.path.empty();
+    if (!match.path.empty()) {
+      sidecar_ = parseSidecar(match.path, path);
+      out_.sidecar = match.path;
+    }
   }
 
   Lanelet2File read() {
@@ -658,8 +959,9 @@ class Lanelet2Reader {
       if (m.kind != 'r' || m.role != "regulatory_element") continue;
       const auto reg = raw_.relations.find(m.ref);
       if (reg == raw_.relations.end()) continue;
+      const bool marking = reg->second.tag("subtype") == "road_marking";  // Autoware: refers = the marking
       for (const auto& rm : reg->second.members) {
-        if (rm.kind != 'w' || rm.role != "ref_line") continue;
+        if (rm.kind != 'w' || (rm.role != "ref_line" && !(marking && rm.role == "refers"))) continue;
         const auto w = raw_.ways.find(rm.ref);
         if (w != raw_.ways.end() && w->second.type == "stop_line") return rm.ref;
       }
@@ -681,7 +983,10 @@ class Lanelet2Reader {
         const bool is_left = m.role == "left" || (inverted && m.role.find("left") != std::string::npos);
         const bool is_right = m.role == "right" || (inverted && m.role.find("right") != std::string::npos);
         if (m.role == "centerline") {
-          if (m.kind == 'w') rl.centre_way = m.ref;
+          if (m.kind == 'w') {
+            rl.centre_way = m.ref;
+            centre_ways_.insert(m.ref);
+          }
           ++centres;
           continue;
         }
@@ -715,6 +1020,13 @@ class Lanelet2Reader {
     };
     const std::string turn = rel.tag("turn_direction");
     ll.turn = turnOf(turn);
+    if (sidecar_) {
+      const auto it = sidecar_->lanelets.find(ll.id);
+      if (it != sidecar_->lanelets.end()) {
+        fillFromSidecar(rl, it->second);
+        return;
+      }
+    }
     ll.road_id = integer("lanemap:road_id", -1);
     ll.from_node = integer("lanemap:from_node", -1);
     ll.to_node = integer("lanemap:to_node", -1);
@@ -736,6 +1048,26 @@ class Lanelet2Reader {
     }
   }
 
+  // lanemap's attributes of a lanelet from its sidecar entry. The sidecar's `turn` is the model's
+  // (kNone where the writer derived turn_direction from the geometry).
+  void fillFromSidecar(ReadLanelet& rl, const nlohmann::json& j) {
+    map::Lanelet& ll = rl.lanelet;
+    const std::string where = "lanelet " + std::to_string(ll.id) + " ";
+    try {
+      ll.kind = j.at("kind").get<std::string>() == "intersection" ? LaneletKind::kIntersection : LaneletKind::kRoad;
+      ll.road_id = j.at("road_id").get<int64_t>();
+      ll.from_node = j.at("from_node").get<int64_t>();
+      ll.to_node = j.at("to_node").get<int64_t>();
+      ll.intersection_id = j.at("intersection_id").get<int64_t>();
+      ll.index_from_left = j.at("index_from_left").get<int>();
+      ll.turn = j.contains("turn") ? turnOf(j.at("turn").get<std::string>()) : TurnDirection::kNone;
+      if (j.contains("stop_line")) rl.stop_way = j.at("stop_line").get<int64_t>();
+    } catch (const std::exception& e) {
+      throw Lanelet2Error("malformed lanemap sidecar '" + sidecar_->path + "' of '" + path_ + "': " + where + e.what());
+    }
+    if (rl.stop_way) way(*rl.stop_way, ll.id);
+  }
+
   // Every node the kept lanelets use (and one way using it), for the coordinate decision.
   std::map<int64_t, int64_t> usedNodes() const {
     std::map<int64_t, int64_t> used;
@@ -751,24 +1083,58 @@ class Lanelet2Reader {
       if (rl.stop_way) add(*rl.stop_way);
     }
     for (const auto& [way_id, w] : raw_.ways) {
-      if (isStandaloneLine(w)) add(way_id);
+      if (isStandaloneLine(way_id, w)) add(way_id);
     }
     return used;
   }
 
   // A typed marking or border way whose nodes are all there: kept as a LineString even when no
   // lanelet uses it (a curb behind a parking lane, a lone stop line), so nothing typed is lost.
-  bool isStandaloneLine(const RawWay& w) const {
+  bool isStandaloneLine(int64_t way_id, const RawWay& w) const {
     if (w.refs.size() < 2 || (w.type != "virtual" && lineTypeOf(w) == LineType::kVirtual)) return false;
+    if (centre_ways_.count(way_id)) return false;  // a lanelet's centre line, not a marking
     return std::all_of(w.refs.begin(), w.refs.end(), [&](int64_t n) {
       const auto it = raw_.nodes.find(n);
       return it != raw_.nodes.end() && it->second.located;
     });
   }
 
-  // Positions from lat/lon(/ele); from local_x/local_y when every used node has them and they
-  // agree with lat/lon in our frame (the file was written with our origin).
+  // The node's mm-precise position from the sidecar, in the reader's frame; nullopt when the
+  // sidecar has none for it. `ele` is the node's; `p` its position from lat/lon.
+  std::optional<Eigen::Vector3d> sidecarPosition(int64_t id, double ele) const {
+    if (!sidecar_ || id < sidecar_->first_node_id) return std::nullopt;
+    const uint64_t i = static_cast<uint64_t>(id - sidecar_->first_node_id);
+    if (2 * i + 1 >= sidecar_->local_xy.size()) return std::nullopt;
+    const double x = sidecar_->local_xy[2 * i], y = sidecar_->local_xy[2 * i + 1];
+    if (!writer_frame_) writer_frame_.emplace(sidecar_->origin);
+    const geo::LatLonAlt g = writer_frame_->toWgs84(Eigen::Vector3d(x, y, ele - sidecar_->origin.alt));
+    return latLonEleToEnu(frame_, g.lat, g.lon, ele);
+  }
+
+  // Positions from lat/lon(/ele); from the sidecar's ENU coordinates (converted to our frame), or
+  // else from local_x/local_y, when every used node has them and they agree with lat/lon (for the
+  // tags: in our frame, i.e. the file was written with our origin).
   void decideCoordinates() {
+    if (sidecar_) {
+      bool all = true;
+      std::unordered_map<int64_t, Eigen::Vector3d> precise;
+      for (const auto& [id, way_id] : usedNodes()) {
+        const auto it = raw_.nodes.find(id);
+        if (it == raw_.nodes.end() || !it->second.located) { all = false; break; }
+        const RawNode& n = it->second;
+        const double ele = n.ele.empty() ? options_.origin_alt
+                                         : parseNumber(n.ele, path_, "ele of node " + std::to_string(id));
+        const Eigen::Vector3d p = latLonEleToEnu(frame_, n.lat, n.lon, ele);
+        const auto q = sidecarPosition(id, ele);
+        if (!q || (q->head<2>() - p.head<2>()).norm() >= kLocalXyAgreementM) { all = false; break; }
+        precise[id] = *q;
+      }
+      if (all && !precise.empty()) {
+        position_ = std::move(precise);
+        out_.used_local_xy = true;
+        return;
+      }
+    }
     bool all_local = true;
     for (const auto& [id, way_id] : usedNodes()) {
       const auto it = raw_.nodes.find(id);
@@ -871,7 +1237,7 @@ class Lanelet2Reader {
     // standalone line that would collide gets a fresh id (ids of the map stay distinct).
     std::vector<int64_t> standalone;
     for (const auto& [way_id, w] : raw_.ways) {
-      if (!uses.count(way_id) && !stop_ways.count(way_id) && isStandaloneLine(w)) standalone.push_back(way_id);
+      if (!uses.count(way_id) && !stop_ways.count(way_id) && isStandaloneLine(way_id, w)) standalone.push_back(way_id);
     }
     std::sort(standalone.begin(), standalone.end());  // deterministic fresh ids
     for (int64_t way_id : standalone) addLine(raw_.relations.count(way_id) ? next_id++ : way_id, way_id, false);
@@ -945,9 +1311,26 @@ class Lanelet2Reader {
   std::vector<ReadLanelet> lanelets_;
   std::unordered_map<int64_t, Eigen::Vector3d> position_;
   std::unordered_map<int64_t, Eigen::Vector2d> local_;
+  std::optional<Sidecar> sidecar_;
+  mutable std::optional<geo::LocalFrame> writer_frame_;
+  std::set<int64_t> centre_ways_;
 };
 
 }  // namespace
+
+std::optional<geo::LatLonAlt> lanelet2WriterOrigin(const std::string& osm_path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(osm_path, ec)) return std::nullopt;
+  const SidecarMatch match = findSidecar(osm_path, hex64(fnv1a64(readAll(osm_path))));
+  if (match.path.empty()) return std::nullopt;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(readAll(match.path));
+    const auto& o = j.at("origin");
+    return geo::LatLonAlt{o.at("lat").get<double>(), o.at("lon").get<double>(), o.at("alt").get<double>()};
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
 
 Lanelet2File readLanelet2File(const std::string& path, double origin_lat, double origin_lon,
                               const Lanelet2ReadOptions& options) {

@@ -1,19 +1,34 @@
 // Lanelet2 OSM <-> map::LaneMap. The writer produces a file Lanelet2's own loader reads without
-// errors (positive ids, lat/lon with 10 decimals, `ele` on every node, typed line strings, lanelet
-// relations with left/right members); the reader reads any Lanelet2 map (ours or someone else's,
-// e.g. the Lanelet2 project's Karlsruhe example) with libosmium.
+// errors, with only tags and values Lanelet2's validator (lanelet2_validate) knows (positive ids,
+// lat/lon with 10 decimals, `ele` on every node, typed line strings, lanelet relations with
+// left/right members); the reader reads any Lanelet2 map (ours or someone else's, e.g. the
+// Lanelet2 project's Karlsruhe example) with libosmium.
 //
 // Conventions (see also writeLanelet2/readLanelet2 below):
+// - lanemap's own metadata (a lanelet's kind, road_id, from/to node, intersection id, lane index,
+//   stop line) and the mm-precise ENU coordinates of the nodes are not in the OSM file but in a
+//   sidecar beside it: MAP.osm -> MAP.lanemap.json (lanelet2SidecarPath), keyed by lanelet id and
+//   bound to the OSM file by the FNV-1a hash of its bytes. readLanelet2 uses it transparently;
+//   a copy of the OSM file under another name in the same folder finds its sidecar by the hash.
+//   Without a (matching) sidecar the reader takes `lanemap:*` lanelet tags (files written before
+//   the sidecar) and lat/lon, which libosmium keeps to 1e-7 degrees (~1 cm).
 // - Coordinates: a node's lat/lon is the point's horizontal position, `ele` = origin_alt + ENU z
-//   (Lanelet2 uses `ele` as z). Every node also carries Autoware's `local_x`/`local_y` tags (ENU
-//   metres of the writer's origin) because libosmium stores lat/lon with 7 decimals (~1 cm); the
-//   reader uses them, for mm precision, when they agree with lat/lon in the reader's frame.
+//   (Lanelet2 uses `ele` as z). Autoware's `local_x`/`local_y` node tags are written on request
+//   (Lanelet2WriteOptions::local_xy_tags; the validator calls them unknown tags) and read when
+//   they agree with lat/lon in the reader's frame.
+// - Points closer than 5 cm (Lanelet2's points_too_close limit) are one node in the file.
 // - Lanelet2 has no successor tags; successors are recovered from shared end/start points.
-// - Stop lines are ways type=stop_line; the lanelet that ends at one carries `lanemap:stop_line`
-//   = the way id (no regulatory element is written). The reader also takes a stop line from a
-//   regulatory element's `ref_line` member (traffic lights, right of way) in foreign maps.
-// - The centre line is written as a way (type=centerline) with member role `centerline`, which
+// - Stop lines are ways type=stop_line; the lanelet that ends at one names it in the sidecar (and
+//   in Autoware's layout references a road_marking regulatory element referring to it). The
+//   reader also takes a stop line from a regulatory element's `ref_line` member (traffic lights,
+//   right of way) or a road_marking's `refers` in foreign maps.
+// - The centre line is written as a way (type=virtual) with member role `centerline`, which
 //   Lanelet2 loads as the lanelet's centreline; without it the reader averages the two bounds.
+// - Autoware's tags: `lane_change` (yes on a dashed line between two same-direction lanes, no on
+//   any other line between them), `speed_limit` (km/h), `location`, `one_way`, `subtype` on every
+//   lanelet; `turn_direction` on every intersection lanelet (from its centre line when the model
+//   has none) only on request (turn_direction_tags, Autoware's folder layout): Lanelet2's
+//   validator does not know it.
 #pragma once
 
 #include "core/geo/local_frame.h"
@@ -22,6 +37,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,9 +52,38 @@ struct Lanelet2WriteOptions {
   bool write_centre_lines = true;  // the model's centre line as a `centerline` member way
   bool check_orientation = true;   // throw when a lanelet's bounds do not run in one direction
                                    // with the left bound on the left (see orientationProblems)
+  bool write_sidecar = true;       // MAP.lanemap.json beside MAP.osm (lanemap's metadata)
+  bool write_projector_info = true;// map_projector_info.yaml in the map's folder (Autoware)
+  bool local_xy_tags = false;      // Autoware's local_x/local_y on every node (for its `Local`
+                                   // projector; Lanelet2's validator warns: unknown tags)
+  // Autoware's `turn_direction` on every intersection lanelet. Lanelet2's validator does not know
+  // the tag (one unknown_tags warning per intersection lanelet), so a plain map leaves it out (the
+  // sidecar keeps the model's turn); writeAutowareMapFolder writes it.
+  bool turn_direction_tags = false;
+  // Each stop line as the `refers` member of Autoware's regulatory element subtype=road_marking,
+  // referenced by the lanelet it ends. Plain Lanelet2 implements no road_marking (its loader
+  // reports an error per element and per lanelet referencing one), and none of the elements it
+  // has fits a stop line alone (a traffic sign or light needs its sign, right of way the priority
+  // of the roads); so only Autoware's folder layout writes them.
+  bool stop_line_road_markings = false;
+  std::string location = "urban";  // `location` of every lanelet (urban, nonurban, private)
+  // `speed_limit` (km/h) of a road's lanelets: OSM maxspeed by lanelet road_id (speedLimitsKmh),
+  // else this default (40 km/h = 25 mph, the US residential default; intersection lanelets take
+  // the slower of the roads they join, else the default).
+  double default_speed_limit_kmh = 40.0;
+  std::map<int64_t, double> speed_limit_kmh_by_road;
 };
 
-// Writes `map` as Lanelet2 OSM to `path`, atomically. Throws Lanelet2Error (message names the
+// The sidecar of a map file: "DIR/NAME.osm" -> "DIR/NAME.lanemap.json" (other names: + ".lanemap.json").
+std::string lanelet2SidecarPath(const std::string& osm_path);
+// The writer's ENU origin of a lanemap file, from its matching sidecar; nullopt without one.
+std::optional<geo::LatLonAlt> lanelet2WriterOrigin(const std::string& osm_path);
+// Parses an OSM maxspeed value to km/h: "50", "50 km/h", "25 mph", "30 knots"; nullopt for
+// "none", "signals", "walk", country codes ("DE:urban") and anything else.
+std::optional<double> parseMaxspeedKmh(const std::string& value);
+
+// Writes `map` as Lanelet2 OSM to `path`, atomically, after its sidecar (write_sidecar) and with
+// map_projector_info.yaml beside it (write_projector_info). Throws Lanelet2Error (message names the
 // path and the offending id) on an inconsistent map: a missing bound or stop line, a bound with
 // fewer than 2 points, duplicate line or lanelet ids, or (check_orientation) a wrongly oriented
 // lanelet. Ids: ways keep the LineString ids and relations the Lanelet ids when all are positive
@@ -49,6 +94,19 @@ void writeLanelet2(const map::LaneMap& map, const std::string& path,
 // The same document as a string (what writeLanelet2 writes). `name` is used in error messages.
 std::string toLanelet2Xml(const map::LaneMap& map, const Lanelet2WriteOptions& options = {},
                           const std::string& name = "<lanelet2>");
+struct Lanelet2Document {
+  std::string osm;      // the OSM file
+  std::string sidecar;  // its MAP.lanemap.json (bound to `osm` by its hash)
+};
+Lanelet2Document toLanelet2Document(const map::LaneMap& map, const Lanelet2WriteOptions& options = {},
+                                    const std::string& name = "<lanelet2>");
+// Autoware's map_projector_info.yaml for the map's origin: projector_type LocalCartesian (the ENU
+// frame of lanemap, GeographicLib's LocalCartesian), vertical_datum WGS84, map_origin lat/lon/alt.
+std::string autowareProjectorInfo(const map::LaneMap& map);
+// Autoware's map folder layout: DIR/lanelet2_map.osm (+ its sidecar) and DIR/map_projector_info.yaml,
+// with turn_direction_tags and stop_line_road_markings set.
+void writeAutowareMapFolder(const map::LaneMap& map, const std::string& dir,
+                            const Lanelet2WriteOptions& options = {});
 
 // How Lanelet2's loader would read a lanelet: it aligns the two bounds as stored with
 // lanelet2::geometry::align (the left bound is turned unless the middle point of the right bound
@@ -81,7 +139,9 @@ struct Lanelet2File {
   // lanes) is copied, reversed, under a fresh id, so every bound runs in its lanelet's driving
   // direction as LaneMap requires: copy id -> way id.
   std::map<int64_t, int64_t> reversed_copy_of;
-  bool used_local_xy = false;  // coordinates came from local_x/local_y tags (mm precision)
+  bool used_local_xy = false;  // coordinates came from the sidecar or local_x/local_y (mm precision)
+  std::string sidecar;         // the sidecar used (empty: none matched)
+  bool stale_sidecar = false;  // MAP.lanemap.json exists but belongs to another version of MAP.osm
   size_t computed_centres = 0; // lanelets whose centre was averaged from the bounds
 };
 

@@ -165,6 +165,8 @@ GraphRun runGraph(const NetnsLan& lan, const Roles& roles, const std::string& dr
   std::error_code ec;
   out.map_file = dir + "/lane_map.osm";
   std::filesystem::copy_file(store + "/lane_map.osm", out.map_file, ec);
+  // ... with its sidecar, which holds the lanelets' road ids (core/io/lanelet2.h).
+  if (!ec) std::filesystem::copy_file(store + "/lane_map.lanemap.json", dir + "/lane_map.lanemap.json", ec);
   std::this_thread::sleep_for(1s);  // the logger's last STATUS and flush
   const int rc_mapping = mapping.stop(), rc_perception = perception.stop(), rc_viewer = viewer.stop();
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

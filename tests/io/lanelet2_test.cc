@@ -17,6 +17,8 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
 namespace lanemap::io {
@@ -50,6 +52,11 @@ const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchClea
 
 void writeText(const std::string& path, const std::string& text) {
   std::ofstream(path) << text;
+}
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 map::LineString line(int64_t id, LineType type, std::vector<Eigen::Vector3d> pts) {
@@ -232,7 +239,7 @@ TEST(Lanelet2, WrittenFileFollowsLanelet2Rules) {
   EXPECT_GT(s.nodes, 0u);
   EXPECT_EQ(s.nodes_with_ele, s.nodes);
   EXPECT_EQ(s.ways, 6u + 3u);  // 6 line strings + 3 centre lines
-  EXPECT_EQ(s.relations, 3u);
+  EXPECT_EQ(s.relations, 3u);  // no regulatory element: plain Lanelet2 has none for a bare stop line
   // Successors share nodes: line 1 ends where line 4 starts, line 2 where line 5 starts.
   EXPECT_EQ(s.way_nodes.at(1).back(), s.way_nodes.at(4).front());
   EXPECT_EQ(s.way_nodes.at(2).back(), s.way_nodes.at(5).front());
@@ -247,8 +254,12 @@ TEST(Lanelet2, WrittenFileFollowsLanelet2Rules) {
   EXPECT_EQ(tags.at("subtype"), "road");
   EXPECT_EQ(tags.at("location"), "urban");
   EXPECT_EQ(tags.at("one_way"), "yes");
-  EXPECT_EQ(tags.at("turn_direction"), "straight");
-  EXPECT_EQ(s.relation_tags.at(100).count("turn_direction"), 0u);
+  EXPECT_EQ(tags.at("speed_limit"), "40");
+  // turn_direction is Autoware's (Lanelet2's validator does not know it): only in its folder layout.
+  EXPECT_EQ(tags.count("turn_direction"), 0u);
+  for (const auto& [id, t] : s.relation_tags) {
+    for (const auto& [k, v] : t) EXPECT_NE(k.rfind("lanemap:", 0), 0u) << id << " " << k;
+  }
   EXPECT_EQ(s.relation_members.at(100).at("left"), 1);
   EXPECT_EQ(s.relation_members.at(100).at("right"), 2);
   EXPECT_EQ(s.relation_members.at(101).at("left"), 2);
@@ -560,13 +571,22 @@ TEST(Lanelet2, BadFilesThrowWithThePath) {
             "<member type='way' ref='78' role='right'/><tag k='type' v='lanelet'/></relation>\n</osm>\n");
   expectThrowNaming(missing_way, "77");
 
+  // A malformed value in the sidecar: the error names the sidecar and the lanelet.
+  const std::string bad_side = tempPath("bad_side.osm");
+  writeLanelet2(handMadeMap(), bad_side);
+  std::string side = readText(lanelet2SidecarPath(bad_side));
+  const std::string key = "\"road_id\":7";
+  ASSERT_NE(side.find(key), std::string::npos);
+  side.replace(side.find(key), key.size(), "\"road_id\":\"seven\"");
+  writeText(lanelet2SidecarPath(bad_side), side);
+  expectThrowNaming(bad_side, "bad_side.lanemap.json");
+  expectThrowNaming(bad_side, "lanelet 100");
+
+  // A file of the old format (lanemap:* tags on the lanelets) still reads; a bad tag names its value.
   const std::string bad_tag = tempPath("bad_tag.osm");
-  writeLanelet2(handMadeMap(), bad_tag);
-  std::ifstream in(bad_tag);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string key = "k=\"lanemap:road_id\" v=\"7\"";
-  ASSERT_NE(text.find(key), std::string::npos);
-  text.replace(text.find(key), key.size(), "k=\"lanemap:road_id\" v=\"seven\"");
+  std::string text = toLanelet2Xml(handMadeMap());
+  text.replace(text.find("    <tag k=\"type\" v=\"lanelet\"/>"), 0,
+               "    <tag k=\"lanemap:road_id\" v=\"seven\"/>\n");
   writeText(bad_tag, text);
   expectThrowNaming(bad_tag, "seven");
 }
@@ -583,6 +603,224 @@ TEST(Lanelet2, CoordinateConventionRoundTripsExactly) {
     // In a frame at the same lat/lon but altitude 0: the same x/y, z shifted by 250 m.
     EXPECT_LT((latLonEleToEnu(ground, g.lat, g.lon, g.alt) - (p + Eigen::Vector3d(0, 0, 250))).norm(), 1e-6);
   }
+}
+
+// Every tag key and value the writer uses is one Lanelet2's validator knows (its lists in
+// lanelet2_validation/src/validators/CheckTags.cpp, v1.2.3): no unknown_tags/unknown_tag_value.
+struct AllTags : osmium::handler::Handler {
+  std::map<std::string, std::set<std::string>> nodes, ways, relations;  // key -> values
+  static void add(const osmium::TagList& t, std::map<std::string, std::set<std::string>>& out) {
+    for (const auto& tag : t) out[tag.key()].insert(tag.value());
+  }
+  void node(const osmium::Node& n) { add(n.tags(), nodes); }
+  void way(const osmium::Way& w) { add(w.tags(), ways); }
+  void relation(const osmium::Relation& r) { add(r.tags(), relations); }
+};
+
+AllTags tagsOf(const std::string& path) {
+  AllTags t;
+  osmium::io::Reader reader{osmium::io::File{path, "osm"}};
+  osmium::apply(reader, t);
+  reader.close();
+  return t;
+}
+
+TEST(Lanelet2, WritesOnlyTagsLanelet2Knows) {
+  const std::string path = tempPath("known_tags.osm");
+  writeLanelet2(handMadeMap(), path);
+  const AllTags t = tagsOf(path);
+  const std::set<std::string> point_keys{"ele", "type", "subtype"};
+  const std::set<std::string> line_keys{"type", "subtype", "lane_change", "width", "height", "temporary", "color"};
+  const std::set<std::string> lanelet_keys{"type", "subtype", "one_way", "name", "region", "speed_limit",
+                                           "location", "participant"};
+  for (const auto& [k, v] : t.nodes) EXPECT_TRUE(point_keys.count(k)) << "node tag " << k;
+  for (const auto& [k, v] : t.ways) EXPECT_TRUE(line_keys.count(k)) << "way tag " << k;
+  for (const auto& [k, v] : t.relations) EXPECT_TRUE(lanelet_keys.count(k)) << "relation tag " << k;
+  const std::set<std::string> line_types{"curbstone", "line_thin", "stop_line", "virtual"};
+  for (const auto& v : t.ways.at("type")) EXPECT_TRUE(line_types.count(v)) << "line type " << v;
+  EXPECT_EQ(t.ways.at("type").count("centerline"), 0u);
+  EXPECT_EQ(t.relations.at("subtype"), (std::set<std::string>{"road"}));
+  EXPECT_EQ(t.relations.at("type"), (std::set<std::string>{"lanelet"}));
+  EXPECT_EQ(t.relations.at("location"), std::set<std::string>{"urban"});
+  EXPECT_EQ(t.relations.at("one_way"), std::set<std::string>{"yes"});
+  EXPECT_EQ(t.nodes.count("local_x"), 0u);
+  // On request Autoware's local_x/local_y are there (and read back).
+  Lanelet2WriteOptions autoware;
+  autoware.local_xy_tags = true;
+  autoware.write_sidecar = false;
+  const std::string with_xy = tempPath("xy/known_tags.osm");
+  std::filesystem::create_directories(tempPath("xy"));
+  writeLanelet2(handMadeMap(), with_xy, autoware);
+  EXPECT_EQ(tagsOf(with_xy).nodes.count("local_x"), 1u);
+  EXPECT_FALSE(std::filesystem::exists(lanelet2SidecarPath(with_xy)));
+  const Lanelet2File f = readLanelet2File(with_xy, 49.0, 8.4);
+  EXPECT_TRUE(f.used_local_xy);
+  EXPECT_TRUE(f.sidecar.empty());
+  EXPECT_EQ(f.map.lanelet(100)->road_id, -1);  // no sidecar: lanemap's attributes are unknown
+}
+
+TEST(Lanelet2, SidecarHoldsMetadataFollowsACopyAndIsIgnoredWhenStale) {
+  const LaneMap m = handMadeMap();
+  const std::string dir = tempPath("side");
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/map.osm";
+  writeLanelet2(m, path);
+  EXPECT_EQ(lanelet2SidecarPath(path), dir + "/map.lanemap.json");
+  EXPECT_EQ(lanelet2SidecarPath("/x/y.xml"), "/x/y.xml.lanemap.json");
+  ASSERT_TRUE(std::filesystem::exists(dir + "/map.lanemap.json"));
+  const auto side = nlohmann::json::parse(readText(dir + "/map.lanemap.json"));
+  EXPECT_EQ(side["lanelets"]["101"]["road_id"].get<int64_t>(), 7);
+  EXPECT_EQ(side["lanelets"]["101"]["stop_line"].get<int64_t>(), 6);
+  EXPECT_EQ(side["lanelets"]["102"]["kind"].get<std::string>(), "intersection");
+  const auto origin = lanelet2WriterOrigin(path);
+  ASSERT_TRUE(origin.has_value());
+  EXPECT_DOUBLE_EQ(origin->lat, 49.0);
+  EXPECT_DOUBLE_EQ(origin->alt, 112.5);
+
+  // A copy under another name in the same folder finds the sidecar by the hash of its bytes.
+  std::filesystem::copy_file(path, dir + "/copy.osm");
+  const Lanelet2File copy = readLanelet2File(dir + "/copy.osm", 49.0, 8.4);
+  EXPECT_EQ(copy.sidecar, dir + "/map.lanemap.json");
+  EXPECT_EQ(copy.map.lanelet(100)->road_id, 7);
+  EXPECT_EQ(copy.map.lanelet(102)->turn, TurnDirection::kStraight);
+  ASSERT_TRUE(copy.map.lanelet(101)->stop_line_id.has_value());
+
+  // Read in another frame (origin 300 m away): still mm-precise, converted from the writer's frame.
+  const geo::LocalFrame writer({49.0, 8.4, 0.0});
+  const geo::LatLonAlt other = writer.toWgs84(Eigen::Vector3d(300, -200, 0));
+  const Lanelet2File moved = readLanelet2File(path, other.lat, other.lon);
+  EXPECT_TRUE(moved.used_local_xy);
+  const geo::LocalFrame reader({other.lat, other.lon, 0.0});
+  for (const auto& l : m.lines) {
+    for (size_t i = 0; i < l.points.size(); ++i) {
+      const geo::LatLonAlt g = enuToLatLonEle(geo::LocalFrame({49.0, 8.4, 112.5}), l.points[i]);
+      const Eigen::Vector3d want = latLonEleToEnu(reader, g.lat, g.lon, g.alt);
+      EXPECT_LT((moved.map.line(l.id)->points[i] - want).norm(), 1e-3) << l.id << " " << i;
+    }
+  }
+
+  // The map replaced by another one but not its sidecar (a crash between the two writes): the
+  // sidecar no longer matches and is ignored.
+  LaneMap changed = m;
+  changed.lines[0].points[0].x() += 1.0;
+  std::filesystem::remove(dir + "/copy.osm");
+  writeText(path, toLanelet2Xml(changed));
+  const Lanelet2File stale = readLanelet2File(path, 49.0, 8.4);
+  EXPECT_TRUE(stale.stale_sidecar);
+  EXPECT_TRUE(stale.sidecar.empty());
+  EXPECT_EQ(stale.map.lanelet(100)->road_id, -1);
+  EXPECT_FALSE(lanelet2WriterOrigin(path).has_value());
+  // Written without a sidecar, the map leaves no old one behind.
+  Lanelet2WriteOptions no_side;
+  no_side.write_sidecar = false;
+  writeLanelet2(m, path, no_side);
+  EXPECT_FALSE(std::filesystem::exists(dir + "/map.lanemap.json"));
+}
+
+TEST(Lanelet2, AutowareTagsLaneChangeSpeedLimitTurnDirection) {
+  LaneMap m = handMadeMap();
+  m.lines[0].type = LineType::kSolid;
+  // A left turn at the end of lanelet 101 with no turn of its own: the writer derives it.
+  m.lines.push_back(line(7, LineType::kVirtual, {{50, 0, 0.5}, {55, 1, 0.5}, {58, 5, 0.5}, {59, 10, 0.5}}));
+  m.lines.push_back(line(8, LineType::kVirtual, {{50, -3.5, 0.5}, {58, -2, 0.5}, {62, 4, 0.5}, {62.5, 10, 0.5}}));
+  map::Lanelet turn;
+  turn.id = 103;
+  turn.kind = LaneletKind::kIntersection;
+  turn.left_id = 7;
+  turn.right_id = 8;
+  for (size_t i = 0; i < 4; ++i) turn.centre.push_back(0.5 * (m.lines[6].points[i] + m.lines[7].points[i]));
+  m.lanelets.push_back(turn);
+  Lanelet2WriteOptions o;
+  o.speed_limit_kmh_by_road = {{7, 30.0}};
+  const std::string dir = tempPath("autoware");
+  writeAutowareMapFolder(m, dir, o);
+  const std::string path = dir + "/lanelet2_map.osm";
+  ASSERT_TRUE(std::filesystem::exists(path));
+  const FileStats s = statsOf(path);
+  std::map<int64_t, std::map<std::string, std::string>> way_tags;
+  struct WayTags : osmium::handler::Handler {
+    std::map<int64_t, std::map<std::string, std::string>>* out;
+    void way(const osmium::Way& w) {
+      for (const auto& t : w.tags()) (*out)[w.id()][t.key()] = t.value();
+    }
+  } h;
+  h.out = &way_tags;
+  osmium::io::Reader reader{osmium::io::File{path, "osm"}};
+  osmium::apply(reader, h);
+  reader.close();
+  EXPECT_EQ(way_tags.at(2).at("lane_change"), "yes");   // dashed, between lanelets 100 and 101
+  EXPECT_EQ(way_tags.at(1).count("lane_change"), 0u);   // a road edge: one lanelet only
+  EXPECT_EQ(way_tags.at(3).count("lane_change"), 0u);
+  EXPECT_EQ(s.relation_tags.at(100).at("speed_limit"), "30");
+  EXPECT_EQ(s.relation_tags.at(102).at("speed_limit"), "30");  // follows lanelet 100 of road 7
+  EXPECT_EQ(s.relation_tags.at(103).at("speed_limit"), "40");  // no road of known speed: default
+  EXPECT_EQ(s.relation_tags.at(102).at("turn_direction"), "straight");
+  EXPECT_EQ(s.relation_tags.at(103).at("turn_direction"), "left");
+  EXPECT_EQ(s.relation_tags.at(100).count("turn_direction"), 0u);
+  // Lanelet 101 ends at stop line 6: it references Autoware's road_marking that refers to it.
+  const int64_t reg = s.relation_members.at(101).at("regulatory_element");
+  EXPECT_EQ(s.relation_tags.at(reg).at("type"), "regulatory_element");
+  EXPECT_EQ(s.relation_tags.at(reg).at("subtype"), "road_marking");
+  EXPECT_EQ(s.relation_members.at(reg).at("refers"), 6);
+  EXPECT_EQ(s.relation_members.at(100).count("regulatory_element"), 0u);
+  // The model's turn comes back, not the derived one.
+  const LaneMap back = readLanelet2(path, 49.0, 8.4);
+  EXPECT_EQ(back.lanelet(103)->turn, TurnDirection::kNone);
+  EXPECT_EQ(back.lanelet(102)->turn, TurnDirection::kStraight);
+
+  // A solid line between the two lanes forbids the change.
+  m.lines[1].type = LineType::kSolid;
+  writeLanelet2(m, dir + "/solid.osm");
+  way_tags.clear();
+  osmium::io::Reader r2{osmium::io::File{dir + "/solid.osm", "osm"}};
+  osmium::apply(r2, h);
+  r2.close();
+  EXPECT_EQ(way_tags.at(2).at("lane_change"), "no");
+
+  const std::string info = readText(dir + "/map_projector_info.yaml");
+  EXPECT_NE(info.find("projector_type: LocalCartesian\n"), std::string::npos) << info;
+  EXPECT_NE(info.find("vertical_datum: WGS84\n"), std::string::npos) << info;
+  EXPECT_NE(info.find("  latitude: 49.0000000000\n"), std::string::npos) << info;
+  EXPECT_NE(info.find("  longitude: 8.4000000000\n"), std::string::npos) << info;
+  EXPECT_NE(info.find("  altitude: 112.5000\n"), std::string::npos) << info;
+}
+
+TEST(Lanelet2, PointsCloserThan5cmAreOneNode) {
+  LaneMap m = handMadeMap();
+  // Line 1 gets a point 2 cm after its first; line 4 starts 3 cm off line 1's end.
+  m.lines[0].points.insert(m.lines[0].points.begin() + 1, m.lines[0].points[0] + Eigen::Vector3d(0.02, 0, 0));
+  m.lines[3].points[0] += Eigen::Vector3d(0.0, 0.03, 0.0);
+  // A line shorter than 5 cm keeps its 2 nodes.
+  m.lines.push_back(line(9, LineType::kSolid, {{100, 100, 0}, {100.03, 100, 0}}));
+  const std::string path = tempPath("close.osm");
+  writeLanelet2(m, path);
+  const FileStats s = statsOf(path);
+  EXPECT_EQ(s.way_nodes.at(1).size(), 6u);
+  EXPECT_EQ(s.way_nodes.at(1).back(), s.way_nodes.at(4).front());
+  EXPECT_EQ(s.way_nodes.at(9).size(), 2u);
+  // No two nodes of the file (but line 9's) closer than 5 cm.
+  const LaneMap back = readLanelet2(path, 49.0, 8.4);
+  std::vector<Eigen::Vector3d> pts;
+  for (const auto& l : back.lines) {
+    if (l.id != 9) pts.insert(pts.end(), l.points.begin(), l.points.end());
+  }
+  for (size_t i = 0; i < pts.size(); ++i) {
+    for (size_t j = 0; j < pts.size(); ++j) {
+      const double d = (pts[i] - pts[j]).norm();
+      EXPECT_TRUE(d == 0.0 || d >= 0.05) << i << " " << j << " " << d;
+    }
+  }
+}
+
+TEST(Lanelet2, ParsesOsmMaxspeed) {
+  EXPECT_DOUBLE_EQ(*parseMaxspeedKmh("50"), 50.0);
+  EXPECT_DOUBLE_EQ(*parseMaxspeedKmh("50 km/h"), 50.0);
+  EXPECT_NEAR(*parseMaxspeedKmh("25 mph"), 40.2336, 1e-4);
+  EXPECT_NEAR(*parseMaxspeedKmh("10 knots"), 18.52, 1e-9);
+  EXPECT_FALSE(parseMaxspeedKmh("none").has_value());
+  EXPECT_FALSE(parseMaxspeedKmh("DE:urban").has_value());
+  EXPECT_FALSE(parseMaxspeedKmh("0").has_value());
+  EXPECT_FALSE(parseMaxspeedKmh("").has_value());
 }
 
 }  // namespace

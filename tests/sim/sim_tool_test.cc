@@ -261,8 +261,10 @@ TEST_F(SimDrive, GroundTruthMapReadsBackWithEveryLanelet) {
   const auto& truth = g_drive->world->truth();
   const auto back = io::readLanelet2(g_drive->out() + "/groundtruth.osm", truth.origin_lat, truth.origin_lon);
   EXPECT_EQ(back.lanelets.size(), truth.lanelets.size());
-  // The file's geometry is the truth simplified by 1 cm: every truth point of every line lies
-  // within 1 cm (+ the 1e-7 degree coordinate rounding) of the line read back.
+  // The file's geometry is the truth simplified by 1 cm, with points closer than 5 cm merged into
+  // one node (Lanelet2's points_too_close; also across lines, e.g. the nearly common start of two
+  // intersection lanelets' bounds): every truth point of every line lies within 1.2 cm + 5 cm of
+  // the line read back (measured: 3.6 cm at most on this drive, line 405).
   size_t truth_points = 0, file_points = 0;
   for (const auto& t : truth.lines) {
     const auto* b = back.line(t.id);
@@ -276,7 +278,7 @@ TEST_F(SimDrive, GroundTruthMapReadsBackWithEveryLanelet) {
         const double u = ab.squaredNorm() > 0 ? std::clamp((p - b->points[i]).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
         best = std::min(best, (p - (b->points[i] + u * ab)).head<2>().norm());
       }
-      ASSERT_LT(best, 0.012) << "line " << t.id;
+      ASSERT_LT(best, 0.062) << "line " << t.id;
     }
   }
   EXPECT_LT(file_points * 2, truth_points) << "simplification should at least halve the nodes";

@@ -57,6 +57,7 @@ Demo output in $out/:
   drive/scenario.json               route, seed, options, counts
   map/map.osm, map.geojson, map.png the lane map built from the drive on the model's labels
   map/summary.json                  every road explored (lanes, or why it failed), labels, timing
+  map/map.lanemap.json              lanemap's metadata for map.osm (copy both together)
   map/eval.json                     its scores against drive/groundtruth.osm
   map-oracle/                       the same on the simulator's truth labels
   live/map.osm, live/eval.json      the drive mapped by the live process graph over LCM (oracle)

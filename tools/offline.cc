@@ -21,6 +21,7 @@
 #include "core/io/geojson.h"
 #include "core/io/lanelet2.h"
 #include "core/io/map_png.h"
+#include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
 #include "core/lanes/options.h"
 #include "core/mapping/map_assembler.h"
@@ -60,6 +61,7 @@ struct Options {
   bool oracle = false;
   std::string segmenter_config = std::string(LANEMAP_SOURCE_DIR) + "/config/segmenter.yaml";
   std::string model;             // overrides the segmenter config's model.path
+  std::string autoware;          // also write Autoware's map folder (lanelet2_map.osm, map_projector_info.yaml) here
   std::string vehicle = std::string(LANEMAP_SOURCE_DIR) + "/config/vehicle.yaml";
   std::string bev_config = std::string(LANEMAP_SOURCE_DIR) + "/config/bev_builder.yaml";
   std::string lanes_config = std::string(LANEMAP_SOURCE_DIR) + "/config/lane_mapper.yaml";
@@ -210,6 +212,9 @@ int main(int argc, char** argv) {
   app.add_option("--segmenter-config", o.segmenter_config, "segmentation model config (its model block)")->capture_default_str();
   app.add_option("--model", o.model, "ONNX model, instead of the segmenter config's model.path");
   app.add_flag("--no-lidar", o.no_lidar, "project on the flat plane only");
+  app.add_option("--autoware", o.autoware,
+                 "also write the map in Autoware's layout into this folder (lanelet2_map.osm with turn_direction and "
+                 "stop-line road_marking elements, map_projector_info.yaml)");
   app.add_option("--vehicle", o.vehicle, "camera and LIDAR calibration")->capture_default_str();
   app.add_option("--bev-config", o.bev_config, "BEV builder options")->capture_default_str();
   app.add_option("--lanes-config", o.lanes_config, "lane exploration options")->capture_default_str();
@@ -256,7 +261,10 @@ int main(int argc, char** argv) {
       throw std::runtime_error(mapper.roadsFailed() > 0 ? "no road was mapped: every road explored failed (see summary.json)"
                                                         : "no road was mapped: did the drive reach an intersection?");
     }
-    io::writeLanelet2(map, (fs::path(o.out) / "map.osm").string());
+    io::Lanelet2WriteOptions write_options;
+    write_options.speed_limit_kmh_by_road = io::speedLimitsKmh(sk);  // OSM maxspeed
+    io::writeLanelet2(map, (fs::path(o.out) / "map.osm").string(), write_options);
+    if (!o.autoware.empty()) io::writeAutowareMapFolder(map, o.autoware, write_options);
     io::writeGeoJson(map, (fs::path(o.out) / "map.geojson").string());
     io::MapPngOptions png;
     png.background_polylines = io::skeletonPolylines(sk);

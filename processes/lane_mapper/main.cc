@@ -11,6 +11,7 @@
 //   lanemap-lane-mapper --config config/lane_mapper.yaml [--osm FILE] [--store DIR]
 #include "core/bev/bev_grid.h"
 #include "core/io/lanelet2.h"
+#include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
 #include "core/mapping/map_assembler.h"
 #include "core/skeleton/skeleton.h"
@@ -73,6 +74,7 @@ class LaneMapperApp {
                 intersections::IntersectionOptions intersection_options, std::vector<osm::Restriction> restrictions)
       : process_(process), sk_(std::move(sk)), options_(options), store_(std::move(store)),
         intersection_options_(std::move(intersection_options)), restrictions_(std::move(restrictions)) {
+    write_options_.speed_limit_kmh_by_road = io::speedLimitsKmh(*sk_);  // OSM maxspeed
     fs::create_directories(fs::path(store_) / "lanes");
     reloadStore();
     worker_ = std::thread([this] { work(); });
@@ -129,7 +131,7 @@ class LaneMapperApp {
     const lanes::ExplorationResult res = lanes::exploreRoad(grid, lanes::RoadGeometry::fromSkeleton(*road), options_);
     const auto& o = sk_->frame().origin();
     map::LaneMap m = lanes::toLaneMap(res, o.lat, o.lon, o.alt);
-    io::writeLanelet2(m, roadFile(job.road_id));  // atomic: a crash leaves the old file or the new one
+    io::writeLanelet2(m, roadFile(job.road_id), write_options_);  // atomic: a crash leaves the old file or the new one
     {
       std::lock_guard<std::mutex> lock(roads_mutex_);
       roads_[job.road_id] = m;
@@ -154,7 +156,7 @@ class LaneMapperApp {
     const map::LaneMap all = assembler.map(&failures);
     for (const auto& f : failures) std::cerr << "lane_mapper: " << f << " failed, the rest is mapped\n";
     process_.counters().set("intersections_failed", static_cast<int64_t>(failures.size()));
-    if (!all.lanelets.empty()) io::writeLanelet2(all, wholeMapFile());
+    if (!all.lanelets.empty()) io::writeLanelet2(all, wholeMapFile(), write_options_);
   }
 
   void reloadStore() {
@@ -220,6 +222,7 @@ class LaneMapperApp {
   std::map<int64_t, map::LaneMap> roads_;
   intersections::IntersectionOptions intersection_options_;
   std::vector<osm::Restriction> restrictions_;
+  io::Lanelet2WriteOptions write_options_;
   std::thread worker_;
 };
 

@@ -1275,8 +1275,13 @@ class Lanelet2Reader {
     }
     const double len = std::max(polylineLength(left), polylineLength(right));
     const double spacing = options_.centre_spacing_m > 0.0 ? options_.centre_spacing_m : 1.0;
-    const size_t n = std::max({size_t{2}, left.size(), right.size(),
-                               static_cast<size_t>(std::ceil(len / spacing)) + 1});
+    // At most kMaxComputedCentrePoints from the spacing: a bound with a node hundreds of km away
+    // (fuzz/regressions/lanelet2) must not become a million-point centre line.
+    constexpr size_t kMaxComputedCentrePoints = 10000;
+    const double wanted = std::ceil(len / spacing) + 1.0;
+    const size_t by_spacing = std::isfinite(wanted) && wanted < kMaxComputedCentrePoints
+                                  ? static_cast<size_t>(wanted) : kMaxComputedCentrePoints;
+    const size_t n = std::max({size_t{2}, left.size(), right.size(), by_spacing});
     const auto l = resampleEvenly(left, n);
     const auto r = resampleEvenly(right, n);
     rl.lanelet.centre.resize(n);

@@ -409,6 +409,18 @@ std::vector<RoadBev> BevBuilder::takeClosed() {
   return out;
 }
 
+bool BevBuilder::withOpenRoad(const std::function<void(const RoadBev&)>& f) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const RoadBev* open = nullptr;
+  for (const int64_t id : accumulator_.activeRoads()) {
+    const RoadBev* r = accumulator_.active(id);
+    if (r && (!open || r->opened_utime >= open->opened_utime)) open = r;
+  }
+  if (!open) return false;
+  f(*open);
+  return true;
+}
+
 BevBuilderStats BevBuilder::stats() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return stats_;

@@ -129,6 +129,10 @@ class BevBuilder {
   void finish();
 
   std::vector<RoadBev> takeClosed();
+  // Calls f with the road being driven (the active road opened last) under the builder's lock, so
+  // f must not call the builder; false (f not called) when no road is active. The viewer's
+  // picture of the open road is drawn from it (lanemap-bev-builder, BEV_OPEN).
+  bool withOpenRoad(const std::function<void(const RoadBev&)>& f) const;
   BevBuilderStats stats() const;
   // Frames waiting for a later pose (neither projected nor counted as skipped yet).
   size_t pendingFrames() const;

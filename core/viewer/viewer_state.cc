@@ -7,8 +7,6 @@
 #include "core/io/lanelet2.h"
 #include "core/mapping/map_assembler.h"
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -18,7 +16,6 @@ namespace {
 
 using nlohmann::json;
 
-constexpr uint8_t kBackgroundAlpha = 64;  // BEV cells seen, but only as background
 
 double round6(double v) { return std::round(v * 1e7) / 1e7; }
 
@@ -117,43 +114,30 @@ void ViewerState::onRoadClosed(int64_t road_id) {
 }
 
 void ViewerState::setBev(int64_t road_id, const bev::BevGrid& grid) {
-  const Eigen::AlignedBox2i cells = grid.cellBounds();
-  if (cells.isEmpty()) throw bev::BevError("BEV grid of road " + std::to_string(road_id) + " is empty");
-  bev::RenderOptions ro;
-  ro.scale = 1;
-  cv::Mat bgr = bev::renderBev(grid, {}, ro);
-  // Unobserved cells (black) become transparent and cells seen only as background faint, so the
-  // map shows through and the lanes and markings stand out.
-  cv::Mat bgra;
-  cv::cvtColor(bgr, bgra, cv::COLOR_BGR2BGRA);
-  const cv::Vec3b background = bev::layerColour(bev::Layer::kObserved);
-  for (int r = 0; r < bgra.rows; ++r) {
-    auto* row = bgra.ptr<cv::Vec4b>(r);
-    for (int c = 0; c < bgra.cols; ++c) {
-      const cv::Vec4b& px = row[c];
-      if (px[0] == 0 && px[1] == 0 && px[2] == 0) row[c][3] = 0;
-      else if (px[0] == background[0] && px[1] == background[1] && px[2] == background[2]) row[c][3] = kBackgroundAlpha;
-    }
+  if (grid.cellBounds().isEmpty()) throw bev::BevError("BEV grid of road " + std::to_string(road_id) + " is empty");
+  setBevPicture(road_id, bev::bevPicture(grid, std::max(1, options_.bev_max_px)), false);
+}
+
+bool ViewerState::setOpenRoadBev(int64_t road_id, const bev::BevPicture& picture) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    // A picture of a road the car has left (it came late, or the road was closed meanwhile) would
+    // hide the closed road's full BEV or the next road's.
+    if (open_road_ >= 0 && road_id != open_road_) return false;
+    if (closed_.count(road_id) && bev_road_ == road_id && !bev_open_) return false;
   }
-  const int longest = std::max(bgra.cols, bgra.rows);
-  if (longest > options_.bev_max_px && options_.bev_max_px > 0) {
-    const double f = static_cast<double>(options_.bev_max_px) / longest;
-    cv::Mat small;
-    cv::resize(bgra, small, cv::Size(std::max(1, static_cast<int>(bgra.cols * f)), std::max(1, static_cast<int>(bgra.rows * f))),
-               0, 0, cv::INTER_AREA);
-    bgra = small;
-  }
-  std::vector<uchar> png;
-  if (!cv::imencode(".png", bgra, png)) throw bev::BevError("cannot encode the BEV of road " + std::to_string(road_id));
-  // ENU extent of the picture: the allocated tiles' outer corners (cellBounds' max is exclusive).
-  const double res = grid.resolution();
-  const Eigen::Vector2d lo = cells.min().cast<double>() * res;
-  const Eigen::Vector2d hi = cells.max().cast<double>() * res;
-  const geo::LatLonAlt sw = skeleton_->frame().toWgs84(Eigen::Vector3d(lo.x(), lo.y(), 0.0));
-  const geo::LatLonAlt ne = skeleton_->frame().toWgs84(Eigen::Vector3d(hi.x(), hi.y(), 0.0));
+  setBevPicture(road_id, picture, true);
+  return true;
+}
+
+void ViewerState::setBevPicture(int64_t road_id, const bev::BevPicture& picture, bool open) {
+  if (picture.png.empty() || picture.enu.isEmpty()) throw bev::BevError("empty BEV picture of road " + std::to_string(road_id));
+  const geo::LatLonAlt sw = skeleton_->frame().toWgs84(Eigen::Vector3d(picture.enu.min().x(), picture.enu.min().y(), 0.0));
+  const geo::LatLonAlt ne = skeleton_->frame().toWgs84(Eigen::Vector3d(picture.enu.max().x(), picture.enu.max().y(), 0.0));
   std::lock_guard<std::mutex> lock(mutex_);
-  bev_png_.assign(png.begin(), png.end());
+  bev_png_.assign(picture.png.begin(), picture.png.end());
   bev_road_ = road_id;
+  bev_open_ = open;
   bev_south_ = sw.lat;
   bev_west_ = sw.lon;
   bev_north_ = ne.lat;
@@ -256,7 +240,7 @@ nlohmann::json ViewerState::stateValue(double now_s) {
   }
   json bev = nullptr;
   if (bev_version_ > 0) {
-    bev = json{{"road_id", bev_road_}, {"version", bev_version_},
+    bev = json{{"road_id", bev_road_}, {"version", bev_version_}, {"open", bev_open_},
                {"bounds", json::array({json::array({bev_south_, bev_west_}), json::array({bev_north_, bev_east_})})}};
   }
   size_t road_lanes = 0, connections = 0;

@@ -1,6 +1,6 @@
 // What the live map viewer (lanemap-viewer, processes/viewer) shows, with no LCM: the car and its
-// trail, the skeleton's roads coloured by coverage, the BEV of the last road the BEV builder
-// handed over, the mapped lanes (every road's lanes plus the intersections built between them,
+// trail, the skeleton's roads coloured by coverage, the BEV of the road being driven (the BEV
+// builder's picture, about once a second) or of the last road it handed over, the mapped lanes (every road's lanes plus the intersections built between them,
 // core/mapping as the lane mapper does) and the health of every process from STATUS. The process
 // feeds it from LCM (or from a finished map store); the HTTP server (http_server.h) reads it.
 // Thread-safe: one mutex; the JSON, GeoJSON, Lanelet2 and PNG outputs are cached per version, so
@@ -8,6 +8,7 @@
 #pragma once
 
 #include "core/bev/bev_grid.h"
+#include "core/bev/bev_render.h"
 #include "core/intersections/intersections.h"
 #include "core/map/lane_map.h"
 #include "core/osm/osm_data.h"
@@ -69,13 +70,17 @@ class ViewerState {
   // BEV_ROAD: the grid the builder wrote for a road (rendered to a PNG with unobserved cells
   // transparent, north up, placed by its ENU bounds). Throws BevError on an empty grid.
   void setBev(int64_t road_id, const bev::BevGrid& grid);
+  // BEV_OPEN: the BEV builder's picture of the road being driven (about once a second). Shown
+  // unless it is of another road than the open one, or of a closed road whose full BEV is shown
+  // (a late picture): then false. Throws BevError on an empty picture.
+  bool setOpenRoadBev(int64_t road_id, const bev::BevPicture& picture);
   // LANE_MAP: the lanes of one road (replacing that road's earlier lanes), in any ENU origin: they
   // are moved into the skeleton's frame when the origin differs.
   void setRoadLanes(int64_t road_id, map::LaneMap lanes);
   // STATUS; now_s: the receiving clock (seconds, monotonic), used for staleness and loss windows.
   void onStatus(const ProcessStatus& status, double now_s);
 
-  // Outputs. stateJson: {version, car, trail_count, open_road, bev, map {roads, road_lanes,
+  // Outputs. stateJson: {version, car, trail_count, open_road, bev {road_id, version, open, bounds}, map {roads, road_lanes,
   // connections, version}, coverage {driven, mapped, never_driven, version}, processes [...]}.
   std::string stateJson(double now_s);
   nlohmann::json stateValue(double now_s);
@@ -99,6 +104,7 @@ class ViewerState {
   Coverage coverage(int64_t road_id) const;
 
  private:
+  void setBevPicture(int64_t road_id, const bev::BevPicture& picture, bool open);
   void assembleLocked();
   Coverage coverageLocked(int64_t road_id) const;
   nlohmann::json processesLocked(double now_s) const;
@@ -132,6 +138,7 @@ class ViewerState {
   uint64_t lanes_cache_version_ = 0, lanelet2_cache_version_ = 0;
   // BEV
   int64_t bev_road_ = -1;
+  bool bev_open_ = false;  // the picture is of the open road (BEV_OPEN), not a closed road's grid
   uint64_t bev_version_ = 0;
   std::string bev_png_;
   double bev_south_ = 0, bev_west_ = 0, bev_north_ = 0, bev_east_ = 0;

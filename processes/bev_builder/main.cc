@@ -1,6 +1,7 @@
 // lanemap-bev-builder: SEMANTIC_FRONT (or SEMANTIC_FRONT_TRUTH), LIDAR_PACKETS, POSE and ROAD_EVENT
 // in; one BEV grid per closed atomic road out, written atomically to <store>/bev/road_<id>.bev and
-// announced on BEV_ROAD (METHOD.md section 3). A thin wrapper over core/bev/bev_builder.h; the mesh
+// announced on BEV_ROAD (METHOD.md section 3); about once a second a picture of the open road's grid
+// on BEV_OPEN for the viewer (config `preview`). A thin wrapper over core/bev/bev_builder.h; the mesh
 // of each LIDAR sweep is built in core's worker thread so LCM handling never waits for it, a frame
 // projection runs inline (tools/bench/bev_bench.cc: ~10-20 ms). Counters in STATUS.
 //
@@ -15,10 +16,12 @@
 //   lanemap-bev-builder --config config/bev_builder.yaml [--osm FILE] [--store DIR] [--vehicle FILE]
 //                       [--semantic-channel SEMANTIC_FRONT_TRUTH] [--no-lidar]
 #include "core/bev/bev_builder.h"
+#include "core/bev/bev_render.h"
 #include "core/bev/bev_store.h"
 #include "core/camera/camera_model.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
+#include "lanemap/bev_preview_t.hpp"
 #include "lanemap/bev_road_t.hpp"
 #include "lanemap/label_image_t.hpp"
 #include "lanemap/lidar_packets_t.hpp"
@@ -50,6 +53,13 @@ class BevBuilderApp {
                 const bev::BevBuilderOptions& options, std::string store)
       : process_(process), skeleton_(std::move(skeleton)), builder_(*skeleton_, camera, options), store_(std::move(store)) {
     builder_.setProjectedCallback([this](int64_t utime) { onProjected(utime); });
+  }
+
+  // BEV_OPEN: a picture at most every period_s seconds (wall clock; 0: never) while a road is open
+  // and has new frames, at most max_px on its longest side.
+  void setPreview(double period_s, int max_px) {
+    preview_period_s_ = period_s;
+    preview_max_px_ = max_px;
   }
 
   void subscribe(const std::string& semantic_channel, const YAML::Node& queues) {
@@ -118,7 +128,44 @@ class BevBuilderApp {
 
   void afterMessage() {
     writeClosed();
+    publishPreview();
     updateCounters();  // a struct copy and ~30 map writes: cheap at ~250 messages/s
+  }
+
+  void publishPreview() {
+    if (preview_period_s_ <= 0.0) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_preview_ < std::chrono::duration<double>(preview_period_s_)) return;
+    last_preview_ = now;
+    bev_preview_t msg;
+    bool drawn = false;
+    try {
+      builder_.withOpenRoad([&](const bev::RoadBev& road) {
+        if (road.grid.frames() == 0 || (road.road_id == preview_road_ && road.grid.frames() == preview_frames_)) return;
+        const bev::BevPicture pic = bev::bevPicture(road.grid, preview_max_px_);
+        preview_road_ = road.road_id;
+        preview_frames_ = road.grid.frames();
+        msg.road_id = road.road_id;
+        msg.num_frames = road.grid.frames();
+        msg.west = pic.enu.min().x();
+        msg.south = pic.enu.min().y();
+        msg.east = pic.enu.max().x();
+        msg.north = pic.enu.max().y();
+        msg.png = pic.png;
+        msg.size = static_cast<int32_t>(msg.png.size());
+        drawn = true;
+      });
+    } catch (const std::exception& e) {
+      process_.counters().add("previews_failed");
+      std::cerr << "bev_builder: preview: " << e.what() << "\n";
+      return;
+    }
+    if (!drawn) return;
+    msg.utime = nowUtime();
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - now).count();
+    process_.lcm().publish(channels::kBevOpen, &msg);
+    process_.counters().add("previews_published");
+    process_.counters().set("preview_us_max", std::max<int64_t>(process_.counters().get("preview_us_max"), static_cast<int64_t>(ms * 1e3)));
   }
 
   void writeClosed() {
@@ -191,6 +238,11 @@ class BevBuilderApp {
   bev::BevBuilder builder_;
   std::string store_;
   std::map<int64_t, int64_t> received_;  // label utime -> recv_utime, frames not yet projected
+  double preview_period_s_ = 1.0;
+  int preview_max_px_ = 512;
+  std::chrono::steady_clock::time_point last_preview_{};
+  int64_t preview_road_ = -1;
+  int preview_frames_ = 0;
 };
 
 }  // namespace
@@ -230,6 +282,12 @@ int main(int argc, char** argv) {
     std::cerr << "bev_builder: " << sk->roads().size() << " atomic roads from " << osm << ", " << channel
               << (options.use_lidar ? " + LIDAR mesh" : " (flat ground)") << ", store " << store << "\n";
     BevBuilderApp app(process, std::move(sk), camera, options, store);
+    double preview_period_s = 1.0;
+    int preview_max_px = 512;
+    read(config["preview"], "period_s", preview_period_s);
+    read(config["preview"], "max_px", preview_max_px);
+    if (preview_max_px < 16) throw std::runtime_error("preview.max_px must be >= 16, got " + std::to_string(preview_max_px));
+    app.setPreview(preview_period_s, preview_max_px);
     app.subscribe(channel, config["queue_capacity"]);
     const int rc = process.spin();
     app.finish();

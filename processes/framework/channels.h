@@ -22,6 +22,7 @@ inline constexpr const char* kSemanticFront = "SEMANTIC_FRONT";
 inline constexpr const char* kSemanticFrontTruth = "SEMANTIC_FRONT_TRUTH";
 inline constexpr const char* kRoadEvent = "ROAD_EVENT";
 inline constexpr const char* kBevRoad = "BEV_ROAD";
+inline constexpr const char* kBevOpen = "BEV_OPEN";
 inline constexpr const char* kLaneMap = "LANE_MAP";
 inline constexpr const char* kStatus = "STATUS";
 
@@ -34,6 +35,7 @@ inline constexpr ChannelSpec kRegistry[] = {
     {kSemanticFrontTruth, "lanemap.label_image_t", 10.0, "sim", "ground-truth class image of a camera frame"},
     {kRoadEvent, "lanemap.road_event_t", 0.0, "road_tracker", "entered an atomic road / reached an intersection"},
     {kBevRoad, "lanemap.bev_road_t", 0.0, "bev_builder", "a closed road's BEV grid in the map store"},
+    {kBevOpen, "lanemap.bev_preview_t", 1.0, "bev_builder", "a picture of the open road's BEV grid, for the viewer"},
     {kLaneMap, "lanemap.lane_map_t", 0.0, "lane_mapper", "lanes of a road or intersection as built"},
     {kStatus, "lanemap.status_t", 1.0, "every process", "counters and health, 1 Hz per process"},
 };

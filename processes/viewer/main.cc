@@ -1,6 +1,7 @@
-// lanemap-viewer: the live map in a browser. Subscribes to POSE, ROAD_EVENT, BEV_ROAD, LANE_MAP and
-// STATUS, keeps what a person wants to see in core/viewer/viewer_state.h (car and trail, the
-// skeleton coloured by coverage, the BEV of the road last handed over, the mapped lanes and
+// lanemap-viewer: the live map in a browser. Subscribes to POSE, ROAD_EVENT, BEV_ROAD, BEV_OPEN,
+// LANE_MAP and STATUS, keeps what a person wants to see in core/viewer/viewer_state.h (car and
+// trail, the skeleton coloured by coverage, the BEV of the open road (its picture, ~1 Hz) or of the
+// road last handed over, the mapped lanes and
 // intersections, every process's health) and serves it with the bundled page (web/viewer, Leaflet
 // from npm, built into build/share/lanemap/viewer) on http://127.0.0.1:8765/ (core/viewer/
 // http_server.h, Boost.Beast). The page updates itself from a server-sent event stream.
@@ -19,6 +20,7 @@
 #include "core/skeleton/skeleton.h"
 #include "core/viewer/http_server.h"
 #include "core/viewer/viewer_state.h"
+#include "lanemap/bev_preview_t.hpp"
 #include "lanemap/bev_road_t.hpp"
 #include "lanemap/lane_map_t.hpp"
 #include "lanemap/pose_t.hpp"
@@ -130,6 +132,7 @@ class LiveFeed {
     process_.lcm().subscribe(channels::kPose, &LiveFeed::onPose, this)->setQueueCapacity(pose_queue);
     process_.lcm().subscribe(channels::kRoadEvent, &LiveFeed::onRoadEvent, this)->setQueueCapacity(100);
     process_.lcm().subscribe(channels::kBevRoad, &LiveFeed::onBevRoad, this)->setQueueCapacity(20);
+    process_.lcm().subscribe(channels::kBevOpen, &LiveFeed::onBevOpen, this)->setQueueCapacity(2);
     process_.lcm().subscribe(channels::kLaneMap, &LiveFeed::onLaneMap, this)->setQueueCapacity(100);
     process_.lcm().subscribe(channels::kStatus, &LiveFeed::onStatus, this)->setQueueCapacity(100);
   }
@@ -157,6 +160,19 @@ class LiveFeed {
       // The grid lives in the map store of the BEV builder's host: not readable from every host.
       process_.counters().add("bev_unreadable");
       std::cerr << "viewer: BEV of road " << msg->road_id << ": " << e.what() << "\n";
+    }
+  }
+  // The open road's picture: only the newest matters (queue of 2).
+  void onBevOpen(const lcm::ReceiveBuffer*, const std::string&, const bev_preview_t* msg) {
+    process_.counters().add("bev_previews_received");
+    bev::BevPicture pic;
+    pic.png.assign(msg->png.begin(), msg->png.end());
+    pic.enu = Eigen::AlignedBox2d(Eigen::Vector2d(msg->west, msg->south), Eigen::Vector2d(msg->east, msg->north));
+    try {
+      if (!state_.setOpenRoadBev(msg->road_id, pic)) process_.counters().add("bev_previews_stale");
+    } catch (const std::exception& e) {
+      process_.counters().add("bev_previews_bad");
+      std::cerr << "viewer: BEV_OPEN of road " << msg->road_id << ": " << e.what() << "\n";
     }
   }
   void onLaneMap(const lcm::ReceiveBuffer* rbuf, const std::string&, const lane_map_t* msg) {

@@ -210,8 +210,14 @@ TEST(BevBuilder, RoadsOpenAndCloseOnEventsAndMemoryStaysWithTheActiveRoad) {
       peak_a = std::max(peak_a, b.accumulator().memoryBytes());
     }
   };
+  EXPECT_FALSE(b.withOpenRoad([](const bev::RoadBev&) { ADD_FAILURE() << "no road is open yet"; }));
   b.roadEntered(a.id, u);
   driveAlong(a);
+  int64_t open = -1;
+  int open_frames = 0;
+  EXPECT_TRUE(b.withOpenRoad([&](const bev::RoadBev& r) { open = r.road_id, open_frames = r.grid.frames(); }));
+  EXPECT_EQ(open, a.id);
+  EXPECT_GT(open_frames, 0);
   b.roadClosed(a.id, u);
   b.roadEntered(next->id, u);
   driveAlong(*next);
@@ -232,6 +238,8 @@ TEST(BevBuilder, RoadsOpenAndCloseOnEventsAndMemoryStaysWithTheActiveRoad) {
   EXPECT_GT(cells, 1000u);
   EXPECT_EQ(outside, 0u);
   EXPECT_EQ(b.accumulator().activeRoads(), std::vector<int64_t>{next->id});
+  EXPECT_TRUE(b.withOpenRoad([&](const bev::RoadBev& r) { open = r.road_id; }));
+  EXPECT_EQ(open, next->id);
   // Closing handed road a's memory over: what is held now is the next road's grid only.
   EXPECT_EQ(b.accumulator().memoryBytes(), b.accumulator().active(next->id)->grid.memoryBytes());
   EXPECT_GT(peak_a, 0u);

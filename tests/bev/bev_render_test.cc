@@ -61,4 +61,46 @@ TEST(BevRender, TheToolWritesThePng) {
   EXPECT_NE(bad.output.find("bad magic"), std::string::npos) << bad.output;
 }
 
+TEST(BevRender, PictureIsShrunkToItsLongestSideKeepingThinLinesAndPlacedByItsCells) {
+  // A 100 m x 2 m strip of drivable cells along x with a one-cell solid line along its middle, and
+  // one background-only cell.
+  BevGrid g(lanemap::bev::BevGridOptions{0.1, 64});
+  for (int x = 0; x < 1000; ++x) {
+    for (int y = 0; y < 20; ++y) {
+      g.add({x, y}, Layer::kObserved, 4);
+      g.add({x, y}, y == 10 ? Layer::kSolidLine : Layer::kDrivable, 4);
+    }
+  }
+  g.add({0, 40}, Layer::kObserved, 2);
+  EXPECT_THROW(lanemap::bev::bevPicture(BevGrid(), 100), lanemap::bev::BevError);
+  EXPECT_THROW(lanemap::bev::bevPicture(g, 0), lanemap::bev::BevError);
+  const auto pic = lanemap::bev::bevPicture(g, 100);
+  // Allocated: 16 x 1 tiles of 64 cells = 1024 x 64 cells; 100 px at most: stride 11.
+  EXPECT_EQ(pic.stride, 11);
+  EXPECT_EQ(pic.width, 94);  // ceil(1024 / 11)
+  EXPECT_EQ(pic.height, 6);  // ceil(64 / 11)
+  EXPECT_NEAR(pic.enu.min().x(), 0.0, 1e-9);
+  EXPECT_NEAR(pic.enu.min().y(), 0.0, 1e-9);
+  EXPECT_NEAR(pic.enu.max().x(), 94 * 1.1, 1e-9);
+  EXPECT_NEAR(pic.enu.max().y(), 6 * 1.1, 1e-9);
+  const cv::Mat img = cv::imdecode(pic.png, cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(img.type(), CV_8UC4);
+  ASSERT_EQ(img.cols, pic.width);
+  ASSERT_EQ(img.rows, pic.height);
+  // Rows from the south: cells y 0..10 are row 5 (the bottom one) and hold the solid line (y = 10),
+  // which wins over the drivable cells around it; y 11..21 (row 4) only drivable.
+  const auto bgra = [&](int row, int col) { return img.at<cv::Vec4b>(row, col); };
+  const cv::Vec3b solid = lanemap::bev::layerColour(Layer::kSolidLine), drivable = lanemap::bev::layerColour(Layer::kDrivable);
+  for (int c : {0, 40, 90}) {
+    EXPECT_EQ(cv::Vec3b(bgra(5, c)[0], bgra(5, c)[1], bgra(5, c)[2]), solid) << c;
+    EXPECT_EQ(bgra(5, c)[3], 255);
+    EXPECT_EQ(cv::Vec3b(bgra(4, c)[0], bgra(4, c)[1], bgra(4, c)[2]), drivable) << c;
+  }
+  EXPECT_EQ(bgra(2, 0)[3], lanemap::bev::kPictureBackgroundAlpha);  // cell (0, 40): seen, background only
+  EXPECT_EQ(bgra(2, 10)[3], 0);                                     // never seen: transparent
+  EXPECT_EQ(bgra(0, 50)[3], 0);
+  // A picture that fits is one pixel per cell.
+  EXPECT_EQ(lanemap::bev::bevPicture(g, 1024).stride, 1);
+}
+
 }  // namespace

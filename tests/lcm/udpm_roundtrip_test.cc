@@ -1,5 +1,6 @@
 // Every lanemap message type, published on its registry channel over udpm:// inside a private
 // network namespace, is received byte-identical (and an image-sized message is not dropped).
+#include "lanemap/bev_preview_t.hpp"
 #include "lanemap/bev_road_t.hpp"
 #include "lanemap/image_t.hpp"
 #include "lanemap/label_image_t.hpp"
@@ -118,6 +119,18 @@ std::map<std::string, std::pair<std::string, std::vector<uint8_t>>> sampleMessag
   bev.height = 1000;
   bev.num_frames = 87;
   out[channels::kBevRoad] = {"lanemap.bev_road_t", encode(bev)};
+
+  bev_preview_t preview;
+  preview.utime = pose.utime;
+  preview.road_id = 12;
+  preview.num_frames = 40;
+  preview.west = -10.0;
+  preview.south = 5.0;
+  preview.east = 10.0;
+  preview.north = 105.0;
+  preview.png = {0x89, 'P', 'N', 'G', 1, 2, 3};
+  preview.size = static_cast<int32_t>(preview.png.size());
+  out[channels::kBevOpen] = {"lanemap.bev_preview_t", encode(preview)};
 
   lane_map_t lm;
   lm.utime = pose.utime;

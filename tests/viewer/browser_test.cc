@@ -223,6 +223,8 @@ TEST(ViewerBrowser, PageShowsTheFirstClosedRoadsLanesTheCarAndEveryProcess) {
   const auto skeleton = lanemap::skeleton::Skeleton::build(lanemap::osm::readOsm(drive + "/roads.osm"));
   EXPECT_EQ(stats["skeletonRoads"].get<size_t>(), skeleton.roads().size());
   EXPECT_GE(stats["bevUpdates"].get<int>(), 1);       // BEV_ROAD comes before the road's LANE_MAP
+  // The open road's BEV (BEV_OPEN, ~1 Hz) was shown and refreshed while the first road was driven.
+  EXPECT_GE(stats["bevOpenUpdates"].get<int>(), 2);
   EXPECT_EQ(stats["transport"], "events");
   // The car drove: the marker moved by tens of metres (the drive runs ~8 m/s).
   EXPECT_GT(stats["carUpdates"].get<int>(), 5);

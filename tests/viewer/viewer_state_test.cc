@@ -306,6 +306,51 @@ TEST(ViewerState, BevPictureIsTransparentWhereUnobservedFaintOnBackgroundAndPlac
   EXPECT_NEAR(s["bev"]["bounds"][1][1].get<double>(), ne.lon, 1e-9);
 }
 
+TEST(ViewerState, OpenRoadPictureIsShownWhileItsRoadIsOpenAndNeverHidesAClosedRoadsBev) {
+  auto sk = westOakland();
+  viewer::ViewerState state(sk);
+  ASSERT_GE(sk->roads().size(), 2u);
+  const int64_t a = sk->roads()[0].id, b = sk->roads()[1].id;
+  bev::BevGrid grid;
+  for (int i = 0; i < 50; ++i) {
+    grid.add({i, 3}, bev::Layer::kObserved, 2);
+    grid.add({i, 3}, bev::Layer::kDrivable, 2);
+  }
+  bev::BevPicture pic = bev::bevPicture(grid, 64);
+  EXPECT_THROW(state.setOpenRoadBev(a, bev::BevPicture()), bev::BevError);
+  state.onRoadEntered(a);
+  ASSERT_TRUE(state.setOpenRoadBev(a, pic));
+  json s = state.stateValue(0.0);
+  EXPECT_EQ(s["bev"]["road_id"], a);
+  EXPECT_EQ(s["bev"]["open"], true);
+  EXPECT_EQ(state.bevPng(), std::string(pic.png.begin(), pic.png.end()));
+  const auto v1 = s["bev"]["version"].get<uint64_t>();
+  // A picture of another road than the open one is not shown.
+  EXPECT_FALSE(state.setOpenRoadBev(b, pic));
+  EXPECT_EQ(state.stateValue(0.0)["bev"]["version"].get<uint64_t>(), v1);
+  // Refreshed: each new picture is a new version.
+  ASSERT_TRUE(state.setOpenRoadBev(a, pic));
+  EXPECT_GT(state.stateValue(0.0)["bev"]["version"].get<uint64_t>(), v1);
+  // The road closes and its full BEV comes: a late picture of it does not replace that.
+  state.onRoadClosed(a);
+  state.setBev(a, grid);
+  s = state.stateValue(0.0);
+  EXPECT_EQ(s["bev"]["open"], false);
+  const auto v2 = s["bev"]["version"].get<uint64_t>();
+  EXPECT_FALSE(state.setOpenRoadBev(a, pic));
+  EXPECT_EQ(state.stateValue(0.0)["bev"]["version"].get<uint64_t>(), v2);
+  // The next road's pictures are shown again, placed by their ENU extent.
+  state.onRoadEntered(b);
+  pic.enu = Eigen::AlignedBox2d(Eigen::Vector2d(100, 200), Eigen::Vector2d(150, 210));
+  ASSERT_TRUE(state.setOpenRoadBev(b, pic));
+  s = state.stateValue(0.0);
+  EXPECT_EQ(s["bev"]["road_id"], b);
+  EXPECT_EQ(s["bev"]["open"], true);
+  const geo::LatLonAlt ne = sk->frame().toWgs84(Eigen::Vector3d(150, 210, 0));
+  EXPECT_NEAR(s["bev"]["bounds"][1][0].get<double>(), ne.lat, 1e-9);
+  EXPECT_NEAR(s["bev"]["bounds"][1][1].get<double>(), ne.lon, 1e-9);
+}
+
 json processNamed(const json& s, const std::string& name) {
   for (const auto& p : s["processes"]) {
     if (p["process"] == name) return p;

@@ -21,7 +21,7 @@
 
   const stats = {
     stateUpdates: 0, skeletonRoads: 0, roadLanesDrawn: 0, connectionsDrawn: 0, lanesByRoad: {},
-    carUpdates: 0, firstCar: null, lastCar: null, carMovedM: 0, bevUpdates: 0, bevRoad: null,
+    carUpdates: 0, firstCar: null, lastCar: null, carMovedM: 0, bevUpdates: 0, bevOpenUpdates: 0, bevRoad: null,
     processes: [], mapVersion: -1, transport: 'none',
   };
 
@@ -84,7 +84,7 @@
   window.lanemapViewer = { stats: stats, map: map, lanesLayer: lanesLayer, skeletonLayer: skeletonLayer };
 
   L.control.layers(null, {
-    'OSM roads (coverage)': skeletonLayer, 'BEV of the last road': bevGroup, 'mapped lanes': lanesLayer,
+    'OSM roads (coverage)': skeletonLayer, 'BEV of the open / last road': bevGroup, 'mapped lanes': lanesLayer,
     'trail': trail,
   }, { collapsed: true }).addTo(map);
   L.control.scale({ imperial: false }).addTo(map);
@@ -165,12 +165,18 @@
     if (!bev || bev.version === bevVersion) return;
     bevVersion = bev.version;
     const url = 'api/bev.png?v=' + bev.version;
-    if (bevOverlay) bevGroup.removeLayer(bevOverlay);
-    bevOverlay = L.imageOverlay(url, bev.bounds, { pane: 'bev', opacity: 0.9, interactive: false });
-    bevGroup.addLayer(bevOverlay);
+    // The open road's picture changes about once a second: swap the image in place (no flicker).
+    if (bevOverlay) {
+      bevOverlay.setUrl(url);
+      bevOverlay.setBounds(L.latLngBounds(bev.bounds));
+    } else {
+      bevOverlay = L.imageOverlay(url, bev.bounds, { pane: 'bev', opacity: 0.9, interactive: false });
+      bevGroup.addLayer(bevOverlay);
+    }
     stats.bevUpdates += 1;
+    if (bev.open) stats.bevOpenUpdates += 1;
     stats.bevRoad = bev.road_id;
-    document.getElementById('bev-road').textContent = 'road ' + bev.road_id;
+    document.getElementById('bev-road').textContent = 'road ' + bev.road_id + (bev.open ? ' (open, live)' : ' (closed)');
   }
 
   function metres(a, b) {

@@ -33,12 +33,31 @@ echo "== the same with the simulator's truth labels (lanemap-offline --oracle), 
 
 echo "== the live graph (oracle labels): lcm-logplayer at 1x -> segmenter --oracle -> road_tracker -> bev_builder"
 echo "   -> lane_mapper over LCM, with lanemap-viewer (lanemap-launch config/launch/demo.yaml, inside a private"
-echo "   network namespace; about 70 s). The viewer serves http://127.0.0.1:8765/ inside that namespace only"
-echo "   (the demo keeps its traffic off the host's network); browse the result afterwards with the command below."
+echo "   network namespace, so that no multicast reaches this host's network; about 70 s)."
 abs_out=$(cd "$out" && pwd)
+mkdir -p "$abs_out/live/logs"
 unshare -rn sh -c 'ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
   "$bin/lanemap-launch" config/launch/demo.yaml --all-hosts --set drive="$abs_out/drive" \
-  --set store="$abs_out/live" --log-dir "$abs_out/live/logs" --status-interval 0 | tail -n 9
+  --set store="$abs_out/live" --log-dir "$abs_out/live/logs" --status-interval 0 > "$abs_out/live/launch.txt" 2>&1 &
+graph=$!
+# The viewer listens on 127.0.0.1:8765 inside that namespace; lanemap-port-bridge forwards this
+# host's 127.0.0.1:8765 (loopback only) into it while the graph runs.
+viewer_port=${LANEMAP_DEMO_VIEWER_PORT:-8765}
+rm -f "$abs_out/live/viewer.url"
+"$bin/lanemap-port-bridge" --pid "$graph" --port 8765 --listen-port "$viewer_port" \
+  --ready-file "$abs_out/live/viewer.url" 2> "$abs_out/live/logs/port_bridge.log" &
+bridge=$!
+for _ in $(seq 50); do { [ -s "$abs_out/live/viewer.url" ] || ! kill -0 "$bridge" 2> /dev/null; } && break; sleep 0.1; done
+if [ -s "$abs_out/live/viewer.url" ]; then
+  echo "   The live viewer: open $(cat "$abs_out/live/viewer.url") in a browser on this machine while it runs."
+else
+  echo "   (no live viewer on this host: $(tail -n 1 "$abs_out/live/logs/port_bridge.log" 2> /dev/null))"
+fi
+graph_rc=0
+wait "$graph" || graph_rc=$?
+wait "$bridge" 2> /dev/null || true
+tail -n 9 "$abs_out/live/launch.txt"
+[ "$graph_rc" = 0 ] || { echo "the live graph failed (exit $graph_rc): $abs_out/live/launch.txt, $abs_out/live/logs/"; exit "$graph_rc"; }
 echo "== did the live graph keep up? (lanemap-graph-report: STATUS counters, latency, CPU, from live/graph.lcmlog)"
 "$bin/lanemap-graph-report" --log "$out/live/graph.lcmlog" --drive-log "$out/drive/drive.lcmlog" | tee "$out/live/report.txt"
 cp "$out/live/lane_map.osm" "$out/live/map.osm"
@@ -63,6 +82,7 @@ Demo output in $out/:
   live/map.osm, live/eval.json      the drive mapped by the live process graph over LCM (oracle)
   live/report.txt, graph.lcmlog     its drop counters, latency and CPU (lanemap-graph-report), and
                                     what it recorded: STATUS, ROAD_EVENT, BEV_ROAD, LANE_MAP, POSE
+The live viewer (while the graph ran): $(cat "$abs_out/live/viewer.url" 2> /dev/null || echo "none: see live/logs/port_bridge.log")
 Browse the live graph's map store in a web browser (no LCM, loopback only):
   $bin/lanemap-viewer --store $out/live --osm $out/drive/roads.osm    then open http://127.0.0.1:8765/
 Map data (c) OpenStreetMap contributors, ODbL.

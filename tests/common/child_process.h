@@ -37,6 +37,7 @@ class ChildProcess {
   }
   ~ChildProcess() { stop(); }
   bool started() const { return pid_ > 0; }
+  pid_t pid() const { return pid_; }
   // Exit code after SIGTERM (or after it exited by itself); -1 if it died of a signal.
   int stop() {
     if (pid_ <= 0) return exit_code_;

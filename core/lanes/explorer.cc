@@ -369,164 +369,170 @@ int ExplorationResult::laneCountAt(double s) const {
   return n;
 }
 
-ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road_in, const ExplorerOptions& o,
-                              const std::optional<EgoPose>& ego, int history_stride) {
-  o.validate();
-  if (road_in.polyline.size() < 2) throw LanesError("road " + std::to_string(road_in.road_id) + " has no polyline");
-  ExplorationResult res;
-  res.road_id = road_in.road_id;
-  res.from_node = road_in.from_node;
-  res.to_node = road_in.to_node;
-  auto frame = std::make_shared<FrenetFrame>(road_in.polyline, o.frame_spacing_m, o.frame_smoothing_m);
-  res.frame = frame;
-  const RoadGeometry road = explorationStretch(road_in, frame->length(), o);
-  const double s_stop = road.s_end;
-  double s_start = road.s_begin;
-  if (ego) s_start = std::clamp(frame->toFrenet(ego->position).x(), s_start, s_stop);
-  if (!(s_stop - s_start > 1.0)) throw LanesError("road " + std::to_string(road.road_id) + " has no length to explore");
-  // A lane must cover most of a short road's stretch, else min_lane_length_m.
-  const double min_lane_length = std::min(o.min_lane_length_m, 0.8 * (road.s_end - road.s_begin));
+namespace {
 
-  auto t0 = Clock::now();
-  const Raster R = buildRaster(grid, *frame, road, o);
-  for (uint8_t c : R.code) ++res.stats.raster_cells[c];
-  res.stats.raster_s = since(t0);
-  t0 = Clock::now();
-
-  const int N = o.num_particles;
-  const Footprint fp{o.footprint_length_m, o.footprint_width_m,
-                     std::max(1, static_cast<int>(std::ceil(o.footprint_length_m / 0.5)))};
-  std::mt19937_64 rng(o.seed);
-  std::uniform_real_distribution<double> U01(0.0, 1.0);
-  Eigen::ArrayXd S = Eigen::ArrayXd::Constant(N, s_start), D = Eigen::ArrayXd::Zero(N), PHI = Eigen::ArrayXd::Zero(N);
-  Eigen::ArrayXd V(N), W(N);
-  std::vector<uint8_t> alive(N, 0);
-  const int nbins = static_cast<int>(std::ceil((R.sa + R.ns * R.res) / o.bin_m)) + 1;
-
-  // Free footprint-centre intervals across the road at s (heading along the road); with
-  // `need_good`, only intervals on observed drivable ground.
-  auto freeIntervals = [&](double s, bool need_good) {
-    std::vector<std::pair<double, double>> out;
-    const double hs = fp.L / 2, hd = fp.W / 2;
-    double run0 = NAN, prev = NAN;
-    for (int j = 0; j < R.nd; ++j) {
-      const double d = R.dOf(j);
-      bool ok = R.deadly(s - hs, s + hs, d - hd, d + hd) == 0;
-      if (ok && need_good) ok = R.goodFraction(s - hs, s + hs, d - hd, d + hd) >= o.birth_min_evidence;
-      if (ok) {
-        if (!std::isfinite(run0)) run0 = d;
-        prev = d;
-      }
-      if ((!ok || j == R.nd - 1) && std::isfinite(run0)) {
-        if (prev - run0 >= o.birth_min_free_m) out.push_back({run0, prev});
-        run0 = NAN;
-      }
-    }
-    return out;
-  };
+// Algorithm 1's particle filter over one road's straightened raster (METHOD.md section 4, step 2
+// and 3): N footprints, the start strip, then per step predict (Eq. 5), kill, cluster and track,
+// resample and births, until the particles reach I_j. The steps draw from one random stream in a
+// fixed order, so a run is deterministic for options.seed.
+class ParticleFilter {
+ public:
+  ParticleFilter(const Raster& raster, const ExplorerOptions& o, double s_start, double s_stop, ExplorationStats* stats)
+      : R_(raster), o_(o), N_(o.num_particles),
+        fp_{o.footprint_length_m, o.footprint_width_m, std::max(1, static_cast<int>(std::ceil(o.footprint_length_m / 0.5)))},
+        rng_(o.seed), S_(Eigen::ArrayXd::Constant(N_, s_start)), D_(Eigen::ArrayXd::Zero(N_)),
+        PHI_(Eigen::ArrayXd::Zero(N_)), V_(N_), W_(N_), alive_(N_, 0),
+        nbins_(static_cast<int>(std::ceil((raster.sa + raster.ns * raster.res) / o.bin_m)) + 1),
+        s_start_(s_start), s_stop_(s_stop), stats_(*stats) {}
 
   // Start strip: across the road's observed drivable ground at the first s within 30 m that has
   // any (a road first seen some way in, after a turn: its lanes start there and are carried back
-  // to the road's start below, as lanes that began with the strip); when there is none, across the
-  // free (unobserved) part at the start.
-  {
-    double s = s_start;
+  // to the road's start by fitLanes, as lanes that began with the strip); when there is none,
+  // across the free (unobserved) part at the start. Returns the s it starts at.
+  double seedStartStrip() {
+    double s = s_start_;
     std::vector<std::pair<double, double>> iv;
-    for (; s < std::min(s_stop, s_start + 30.0); s += 1.0) {
+    for (; s < std::min(s_stop_, s_start_ + 30.0); s += 1.0) {
       iv = freeIntervals(s, true);
       if (!iv.empty()) break;
     }
     if (iv.empty()) {
-      s = s_start;
+      s = s_start_;
       iv = freeIntervals(s, false);
     }
-    if (ego && !iv.empty()) {
-      // The strip is perpendicular to the driving direction at the ego pose: that is our s_start.
-    }
     double total = 0.0;
-    for (auto& [a, b] : iv) total += b - a + R.res;
-    for (int n = 0; n < N && total > 0; ++n) {
-      double u = (n + 0.5) / N * total;
+    for (auto& [a, b] : iv) total += b - a + R_.res;
+    for (int n = 0; n < N_ && total > 0; ++n) {
+      double u = (n + 0.5) / N_ * total;
       for (auto& [a, b] : iv) {
-        const double w = b - a + R.res;
+        const double w = b - a + R_.res;
         if (u <= w) {
-          D[n] = a - R.res / 2 + u;
+          D_[n] = a - R_.res / 2 + u;
           break;
         }
         u -= w;
       }
-      S[n] = s;
-      alive[n] = 1;
+      S_[n] = s;
+      alive_[n] = 1;
     }
-    if (total > 0) ++res.stats.births;
-    s_start = s;
+    if (total > 0) ++stats_.births;
+    s_start_ = first_station_ = station_ = s;
+    next_birth_ = s + o_.birth_every_m;
+    return s;
   }
 
-  std::vector<Track> tracks;
-  double next_birth = s_start + o.birth_every_m;
-  std::vector<int> surv;
-  std::vector<Eigen::Vector2d> pts;
-  std::vector<double> lat;
-  std::vector<std::pair<double, int>> byD;
-  const double first_station = s_start;
-  double station = s_start;
-  const int max_steps = static_cast<int>(4.0 * (s_stop - s_start) / (o.v_min * o.dt_s)) + 100;
-
-  for (int step = 0; step < max_steps; ++step) {
-    // --- predict (Eq. 5), vectorised over the particles ---
-    for (int n = 0; n < N; ++n) {
-      V[n] = o.v_min + (o.v_max - o.v_min) * U01(rng);
-      W[n] = o.w_min + (o.w_max - o.w_min) * U01(rng);
+  // Runs the steps until the particles reach I_j (or a bound on the steps). history: the
+  // surviving particles (s, d) of every history_stride-th step.
+  void run(std::vector<Eigen::Vector2d>* history, int history_stride) {
+    const int max_steps = static_cast<int>(4.0 * (s_stop_ - s_start_) / (o_.v_min * o_.dt_s)) + 100;
+    for (int step = 0; step < max_steps; ++step) {
+      predict();
+      kill();
+      ++stats_.steps;
+      advanceStation();
+      if (history && history_stride > 0 && step % history_stride == 0) {
+        for (int n : surv_) history->emplace_back(S_[n], D_[n]);
+      }
+      clusterAndTrack();
+      resample();
+      births();
+      if (finished()) break;
     }
-    const Eigen::ArrayXd moving = (S < s_stop).cast<double>();
-    const Eigen::ArrayXd heading = PHI + W;
-    S += moving * V * heading.cos() * o.dt_s;
-    D += moving * V * heading.sin() * o.dt_s;
-    PHI += moving * W * o.dt_s;
-    // --- evaluate: a footprint touching a boundary dies ---
-    surv.clear();
-    for (int n = 0; n < N; ++n) {
-      if (!alive[n]) continue;
-      ++res.stats.particle_steps;
-      const bool ok = std::abs(PHI[n]) <= o.max_heading_rad && !fp.collides(R, S[n], D[n], PHI[n]);
-      if (ok) surv.push_back(n);
-      else {
-        alive[n] = 0;
-        ++res.stats.deaths;
+    stats_.tracks = static_cast<int>(tracks_.size());
+  }
+
+  const std::vector<Track>& tracks() const { return tracks_; }
+  int bins() const { return nbins_; }
+  double startS() const { return s_start_; }
+
+ private:
+  // Free footprint-centre intervals across the road at s (heading along the road); with
+  // `need_good`, only intervals on observed drivable ground.
+  std::vector<std::pair<double, double>> freeIntervals(double s, bool need_good) const {
+    std::vector<std::pair<double, double>> out;
+    const double hs = fp_.L / 2, hd = fp_.W / 2;
+    double run0 = NAN, prev = NAN;
+    for (int j = 0; j < R_.nd; ++j) {
+      const double d = R_.dOf(j);
+      bool ok = R_.deadly(s - hs, s + hs, d - hd, d + hd) == 0;
+      if (ok && need_good) ok = R_.goodFraction(s - hs, s + hs, d - hd, d + hd) >= o_.birth_min_evidence;
+      if (ok) {
+        if (!std::isfinite(run0)) run0 = d;
+        prev = d;
+      }
+      if ((!ok || j == R_.nd - 1) && std::isfinite(run0)) {
+        if (prev - run0 >= o_.birth_min_free_m) out.push_back({run0, prev});
+        run0 = NAN;
       }
     }
-    ++res.stats.steps;
-    if (!surv.empty()) {
-      std::vector<double> ss;
-      for (int n : surv) ss.push_back(S[n]);
-      std::nth_element(ss.begin(), ss.begin() + ss.size() / 2, ss.end());
-      station = std::max(station, ss[ss.size() / 2]);
-    } else {
-      station += 0.5 * (o.v_min + o.v_max) * o.dt_s;  // everything died: look further for births
-    }
-    if (history_stride > 0 && step % history_stride == 0) {
-      for (int n : surv) res.history.emplace_back(S[n], D[n]);
-    }
+    return out;
+  }
 
-    // --- clusters of this step (DBSCAN, the paper's eps) and lane tracking along s ---
+  // Predict (Eq. 5), vectorised over the particles: v ~ U(v_min, v_max), w ~ U(w_min, w_max) per
+  // particle; particles that reached s_stop wait there.
+  void predict() {
+    for (int n = 0; n < N_; ++n) {
+      V_[n] = o_.v_min + (o_.v_max - o_.v_min) * U01_(rng_);
+      W_[n] = o_.w_min + (o_.w_max - o_.w_min) * U01_(rng_);
+    }
+    const Eigen::ArrayXd moving = (S_ < s_stop_).cast<double>();
+    const Eigen::ArrayXd heading = PHI_ + W_;
+    S_ += moving * V_ * heading.cos() * o_.dt_s;
+    D_ += moving * V_ * heading.sin() * o_.dt_s;
+    PHI_ += moving * W_ * o_.dt_s;
+  }
+
+  // Kill: a footprint touching a boundary cell (or turned too far from the road) dies; the
+  // survivors are surv_.
+  void kill() {
+    surv_.clear();
+    for (int n = 0; n < N_; ++n) {
+      if (!alive_[n]) continue;
+      ++stats_.particle_steps;
+      const bool ok = std::abs(PHI_[n]) <= o_.max_heading_rad && !fp_.collides(R_, S_[n], D_[n], PHI_[n]);
+      if (ok) surv_.push_back(n);
+      else {
+        alive_[n] = 0;
+        ++stats_.deaths;
+      }
+    }
+  }
+
+  // The filter's station along s: the survivors' median (it never goes back); when everything
+  // died, it moves on at the mean speed to look further for births.
+  void advanceStation() {
+    if (!surv_.empty()) {
+      std::vector<double> ss;
+      for (int n : surv_) ss.push_back(S_[n]);
+      std::nth_element(ss.begin(), ss.begin() + ss.size() / 2, ss.end());
+      station_ = std::max(station_, ss[ss.size() / 2]);
+    } else {
+      station_ += 0.5 * (o_.v_min + o_.v_max) * o_.dt_s;
+    }
+  }
+
+  // Cluster and track: DBSCAN (the paper's eps) over this step's survivors gives its lanes;
+  // clusters continue, split from or start lane tracks along s, and tracks with no particles for
+  // lane_gap_max_m end (merging into a neighbour).
+  void clusterAndTrack() {
     // DBSCAN runs on the lateral offsets only: the particles of one lane spread along s by more
     // than eps (speed noise, and those already waiting at I_j), which must not split a lane.
-    pts.clear();
-    lat.clear();
-    for (int n : surv) {
-      pts.emplace_back(S[n], D[n]);
-      lat.push_back(D[n]);
+    pts_.clear();
+    lat_.clear();
+    for (int n : surv_) {
+      pts_.emplace_back(S_[n], D_[n]);
+      lat_.push_back(D_[n]);
     }
     int K = 0;
-    const std::vector<int> label = dbscan1d(lat, o.dbscan_eps_m, o.dbscan_min_points, &K);
+    const std::vector<int> label = dbscan1d(lat_, o_.dbscan_eps_m, o_.dbscan_min_points, &K);
     std::vector<Cluster> cl(K, Cluster{INFINITY, -INFINITY, 0.0, 0.0, {}});
-    for (size_t i = 0; i < pts.size(); ++i) {
+    for (size_t i = 0; i < pts_.size(); ++i) {
       if (label[i] < 0) continue;
       Cluster& c = cl[label[i]];
-      c.dmin = std::min(c.dmin, pts[i].y());
-      c.dmax = std::max(c.dmax, pts[i].y());
-      c.dmean += pts[i].y();
-      c.smean += pts[i].x();
+      c.dmin = std::min(c.dmin, pts_[i].y());
+      c.dmax = std::max(c.dmax, pts_[i].y());
+      c.dmean += pts_[i].y();
+      c.smean += pts_[i].x();
       c.members.push_back(static_cast<int>(i));
     }
     for (auto& c : cl) {
@@ -534,15 +540,15 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
       c.smean /= c.members.size();
     }
     // Each active track picks the nearest cluster whose extent (+ tolerance) contains its d.
-    std::vector<int> primary(tracks.size(), -1);
+    std::vector<int> primary(tracks_.size(), -1);
     std::vector<std::vector<int>> claim(K), touched(K);
-    for (size_t t = 0; t < tracks.size(); ++t) {
-      if (!tracks[t].active) continue;
+    for (size_t t = 0; t < tracks_.size(); ++t) {
+      if (!tracks_[t].active) continue;
       double best = INFINITY;
       for (int k = 0; k < K; ++k) {
-        if (tracks[t].d < cl[k].dmin - o.track_tolerance_m || tracks[t].d > cl[k].dmax + o.track_tolerance_m) continue;
+        if (tracks_[t].d < cl[k].dmin - o_.track_tolerance_m || tracks_[t].d > cl[k].dmax + o_.track_tolerance_m) continue;
         touched[k].push_back(static_cast<int>(t));
-        const double e = std::abs(cl[k].dmean - tracks[t].d);
+        const double e = std::abs(cl[k].dmean - tracks_[t].d);
         if (e < best) {
           best = e;
           primary[t] = k;
@@ -550,24 +556,15 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
       }
       if (primary[t] >= 0) claim[primary[t]].push_back(static_cast<int>(t));
     }
-    auto record = [&](Track& tr, const Cluster& c) {
-      for (int m : c.members) {
-        const int b = std::clamp(static_cast<int>(pts[m].x() / o.bin_m), 0, nbins - 1);
-        tr.sum[b] += pts[m].y();
-        tr.cnt[b] += 1;
-      }
-      tr.d = c.dmean;
-      tr.last_seen_s = tr.last_alive_s = c.smean;
-    };
     for (int k = 0; k < K; ++k) {
       auto& cs = claim[k];
       // Two tracks closer than same_lane_m in one cluster are one lane: the younger ends there.
       std::sort(cs.begin(), cs.end());
       for (size_t a = 0; a < cs.size(); ++a) {
         for (size_t b = a + 1; b < cs.size();) {
-          if (std::abs(tracks[cs[a]].d - tracks[cs[b]].d) < o.same_lane_m) {
-            tracks[cs[b]].active = false;
-            tracks[cs[b]].merge_into = cs[a];
+          if (std::abs(tracks_[cs[a]].d - tracks_[cs[b]].d) < o_.same_lane_m) {
+            tracks_[cs[b]].active = false;
+            tracks_[cs[b]].merge_into = cs[a];
             cs.erase(cs.begin() + b);
           } else {
             ++b;
@@ -575,21 +572,21 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
         }
       }
       if (cs.size() == 1) {
-        record(tracks[cs[0]], cl[k]);
+        record(tracks_[cs[0]], cl[k]);
       } else if (cs.size() >= 2) {
-        for (int t : cs) tracks[t].last_alive_s = cl[k].smean;  // distinct lanes in one wide cluster: coast
+        for (int t : cs) tracks_[t].last_alive_s = cl[k].smean;  // distinct lanes in one wide cluster: coast
       } else {
         Track tr;
-        tr.id = static_cast<int>(tracks.size());
+        tr.id = static_cast<int>(tracks_.size());
         tr.first_s = cl[k].smean;
-        tr.initial = cl[k].smean < first_station + 5.0;
-        tr.sum.assign(nbins, 0.0);
-        tr.cnt.assign(nbins, 0.0);
+        tr.initial = cl[k].smean < first_station_ + 5.0;
+        tr.sum.assign(nbins_, 0.0);
+        tr.cnt.assign(nbins_, 0.0);
         if (!touched[k].empty()) {
           tr.parent = touched[k].front();  // split off a lane whose cluster it was part of
         } else if (!tr.initial) {
-          double best = o.split_neighbour_m;
-          for (const Track& other : tracks) {
+          double best = o_.split_neighbour_m;
+          for (const Track& other : tracks_) {
             if (other.active && std::abs(other.d - cl[k].dmean) < best) {
               best = std::abs(other.d - cl[k].dmean);
               tr.parent = other.id;
@@ -597,14 +594,14 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
           }
         }
         record(tr, cl[k]);
-        tracks.push_back(std::move(tr));
+        tracks_.push_back(std::move(tr));
       }
     }
-    for (auto& tr : tracks) {
-      if (tr.active && station - tr.last_alive_s > o.lane_gap_max_m) {
+    for (auto& tr : tracks_) {
+      if (tr.active && station_ - tr.last_alive_s > o_.lane_gap_max_m) {
         tr.active = false;
-        double best = o.split_neighbour_m;
-        for (const Track& other : tracks) {
+        double best = o_.split_neighbour_m;
+        for (const Track& other : tracks_) {
           if (other.id != tr.id && other.active && std::abs(other.d - tr.d) < best) {
             best = std::abs(other.d - tr.d);
             tr.merge_into = other.id;
@@ -612,58 +609,99 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
         }
       }
     }
-
-    // --- resample: each dead particle becomes a copy of a survivor near it in d ---
-    if (!surv.empty()) {
-      byD.clear();
-      for (int n : surv) byD.emplace_back(D[n], n);
-      std::sort(byD.begin(), byD.end());
-      const int ns = static_cast<int>(byD.size());
-      for (int n = 0; n < N; ++n) {
-        if (alive[n]) continue;
-        int pos = static_cast<int>(std::lower_bound(byD.begin(), byD.end(), std::make_pair(D[n], -1)) - byD.begin());
-        pos = std::clamp(pos + static_cast<int>(std::floor(U01(rng) * 4.0)) - 2, 0, ns - 1);
-        const int p = byD[pos].second;
-        S[n] = S[p];
-        D[n] = D[p];
-        PHI[n] = PHI[p];
-        alive[n] = 1;
-      }
-    }
-
-    // --- births on observed drivable ground no particle covers ---
-    if (station >= next_birth && station < s_stop - o.footprint_length_m) {
-      next_birth = station + o.birth_every_m;
-      const auto iv = freeIntervals(station, true);
-      for (const auto& [a, b] : iv) {
-        bool covered = false;
-        for (int n = 0; n < N && !covered; ++n) {
-          covered = alive[n] && D[n] >= a - 0.3 && D[n] <= b + 0.3 && std::abs(S[n] - station) < 4.0;
-        }
-        if (covered) continue;
-        ++res.stats.births;
-        for (int q = 0; q < o.birth_particles; ++q) {
-          const int n = static_cast<int>(U01(rng) * N) % N;
-          S[n] = station + (U01(rng) - 0.5);
-          D[n] = a + (b - a) * (q + 0.5) / o.birth_particles;
-          PHI[n] = 0.0;
-          alive[n] = 1;
-        }
-      }
-    }
-    // Stop when the particles have reached I_j (all that live are at s_stop).
-    bool moving_left = false;
-    for (int n = 0; n < N && !moving_left; ++n) moving_left = alive[n] && S[n] < s_stop;
-    if (!moving_left && station >= s_stop - 1.0) break;
-    if (surv.empty() && station >= s_stop) break;
   }
-  res.stats.filter_s = since(t0);
-  res.stats.tracks = static_cast<int>(tracks.size());
-  t0 = Clock::now();
 
-  // --- keep lanes long enough, fit their centre lines ---
+  // A cluster's particles go into the track's per-s-bin sums (the regression's samples).
+  void record(Track& tr, const Cluster& c) const {
+    for (int m : c.members) {
+      const int b = std::clamp(static_cast<int>(pts_[m].x() / o_.bin_m), 0, nbins_ - 1);
+      tr.sum[b] += pts_[m].y();
+      tr.cnt[b] += 1;
+    }
+    tr.d = c.dmean;
+    tr.last_seen_s = tr.last_alive_s = c.smean;
+  }
+
+  // Resample (local): each dead particle becomes a copy of a survivor near it in d, so one lane's
+  // particles do not take over another's.
+  void resample() {
+    if (surv_.empty()) return;
+    byD_.clear();
+    for (int n : surv_) byD_.emplace_back(D_[n], n);
+    std::sort(byD_.begin(), byD_.end());
+    const int ns = static_cast<int>(byD_.size());
+    for (int n = 0; n < N_; ++n) {
+      if (alive_[n]) continue;
+      int pos = static_cast<int>(std::lower_bound(byD_.begin(), byD_.end(), std::make_pair(D_[n], -1)) - byD_.begin());
+      pos = std::clamp(pos + static_cast<int>(std::floor(U01_(rng_) * 4.0)) - 2, 0, ns - 1);
+      const int p = byD_[pos].second;
+      S_[n] = S_[p];
+      D_[n] = D_[p];
+      PHI_[n] = PHI_[p];
+      alive_[n] = 1;
+    }
+  }
+
+  // Births: every birth_every_m, particles are seeded where a footprint fits on observed drivable
+  // ground that no particle covers (a turn pocket opening, a bus bay, the lane after a parked car).
+  void births() {
+    if (!(station_ >= next_birth_ && station_ < s_stop_ - o_.footprint_length_m)) return;
+    next_birth_ = station_ + o_.birth_every_m;
+    const auto iv = freeIntervals(station_, true);
+    for (const auto& [a, b] : iv) {
+      bool covered = false;
+      for (int n = 0; n < N_ && !covered; ++n) {
+        covered = alive_[n] && D_[n] >= a - 0.3 && D_[n] <= b + 0.3 && std::abs(S_[n] - station_) < 4.0;
+      }
+      if (covered) continue;
+      ++stats_.births;
+      for (int q = 0; q < o_.birth_particles; ++q) {
+        const int n = static_cast<int>(U01_(rng_) * N_) % N_;
+        S_[n] = station_ + (U01_(rng_) - 0.5);
+        D_[n] = a + (b - a) * (q + 0.5) / o_.birth_particles;
+        PHI_[n] = 0.0;
+        alive_[n] = 1;
+      }
+    }
+  }
+
+  // The particles have reached I_j (all that live are at s_stop), or everything died past it.
+  bool finished() const {
+    bool moving_left = false;
+    for (int n = 0; n < N_ && !moving_left; ++n) moving_left = alive_[n] && S_[n] < s_stop_;
+    if (!moving_left && station_ >= s_stop_ - 1.0) return true;
+    return surv_.empty() && station_ >= s_stop_;
+  }
+
+  const Raster& R_;
+  const ExplorerOptions& o_;
+  const int N_;
+  const Footprint fp_;
+  std::mt19937_64 rng_;
+  std::uniform_real_distribution<double> U01_{0.0, 1.0};
+  Eigen::ArrayXd S_, D_, PHI_, V_, W_;
+  std::vector<uint8_t> alive_;
+  const int nbins_;
+  double s_start_, s_stop_;
+  double first_station_ = 0.0, station_ = 0.0, next_birth_ = 0.0;
+  ExplorationStats& stats_;
+  std::vector<Track> tracks_;
+  // Per-step scratch, kept to avoid reallocating.
+  std::vector<int> surv_;
+  std::vector<Eigen::Vector2d> pts_;
+  std::vector<double> lat_;
+  std::vector<std::pair<double, int>> byD_;
+};
+
+// Fit (METHOD.md section 4, step 4): the tracks long enough become lanes, each regressed as d(s)
+// (Eq. 6: piecewise linear with optimised break points, then a natural cubic spline); a lane that
+// began with the start strip is carried back to the road's start. Split and merge relations
+// through dropped tracks go to those tracks' own relations.
+std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const RoadGeometry& road, double s_stop,
+                           double min_lane_length, const ExplorerOptions& o) {
+  std::vector<Lane> lanes;
   std::vector<int> keep_index(tracks.size(), -1);
-  for (auto& tr : tracks) {
+  for (const auto& tr : tracks) {
     const double s_end = tr.active ? s_stop : tr.last_alive_s;
     const double s_beg = tr.initial ? std::max(road.s_begin, 0.0) : tr.first_s;
     double support = 0.0;
@@ -684,11 +722,10 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
     for (double w : bs.weight) lane.particle_samples += static_cast<int64_t>(w);
     lane.split_from = tr.parent;    // track ids for now
     lane.merges_into = tr.merge_into;
-    keep_index[tr.id] = static_cast<int>(res.lanes.size());
-    lane.id = static_cast<int>(res.lanes.size());
-    res.lanes.push_back(std::move(lane));
+    keep_index[tr.id] = static_cast<int>(lanes.size());
+    lane.id = static_cast<int>(lanes.size());
+    lanes.push_back(std::move(lane));
   }
-  // Relations through dropped tracks go to their own relations (a short spur between two lanes).
   auto resolve = [&](int t, bool up) {
     for (int guard = 0; t >= 0 && guard < 64; ++guard) {
       if (keep_index[t] >= 0) return keep_index[t];
@@ -696,43 +733,52 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
     }
     return -1;
   };
-  for (auto& lane : res.lanes) {
+  for (auto& lane : lanes) {
     lane.split_from = resolve(lane.split_from, true);
     lane.merges_into = resolve(lane.merges_into, false);
     if (lane.split_from == lane.id) lane.split_from = -1;
     if (lane.merges_into == lane.id) lane.merges_into = -1;
   }
+  return lanes;
+}
 
-  // --- way-points and boundaries ---
-  auto probe = [&](double s, double d, int dir, uint8_t* hit) {
-    const int i = std::clamp(R.row(s), 0, R.ns - 1);
-    const int j0 = R.col(d);
-    const int steps = static_cast<int>(o.probe_max_m / R.res);
-    for (int k = 1; k <= steps; ++k) {
-      const int j = j0 + dir * k;
-      if (j < 0 || j >= R.nd) break;
-      const uint8_t c = R.at(i, j);
-      if (c < kBlocked) continue;
-      *hit = c;
-      if (c == kSeparation || c == kDashed || c == kSolid) {
-        // The middle of the marking run (the line itself, shared with the neighbour lane).
-        uint8_t strongest = c;
-        int e = j;
-        while (e + dir >= 0 && e + dir < R.nd) {
-          const uint8_t n = R.at(i, e + dir);
-          if (n != kSeparation && n != kDashed && n != kSolid) break;
-          strongest = std::max(strongest, n);
-          e += dir;
-        }
-        *hit = strongest;
-        return R.dOf(j) + (R.dOf(e) - R.dOf(j)) / 2.0;
+// Probe one side (dir +1 left, -1 right) from (s, d) along the normal until a marking, curb,
+// blocked or outside cell: the boundary's offset (a marking's middle, shared with the neighbour
+// lane; a curb's or blocked cell's near edge), and in *hit the class found (kUnobserved: nothing
+// within probe_max_m, default_half_width_m away).
+double probeBoundary(const Raster& R, const ExplorerOptions& o, double s, double d, int dir, uint8_t* hit) {
+  const int i = std::clamp(R.row(s), 0, R.ns - 1);
+  const int j0 = R.col(d);
+  const int steps = static_cast<int>(o.probe_max_m / R.res);
+  for (int k = 1; k <= steps; ++k) {
+    const int j = j0 + dir * k;
+    if (j < 0 || j >= R.nd) break;
+    const uint8_t c = R.at(i, j);
+    if (c < kBlocked) continue;
+    *hit = c;
+    if (c == kSeparation || c == kDashed || c == kSolid) {
+      uint8_t strongest = c;
+      int e = j;
+      while (e + dir >= 0 && e + dir < R.nd) {
+        const uint8_t n = R.at(i, e + dir);
+        if (n != kSeparation && n != kDashed && n != kSolid) break;
+        strongest = std::max(strongest, n);
+        e += dir;
       }
-      return R.dOf(j) - dir * R.res / 2.0;  // near edge of a curb, blocked or outside cell
+      *hit = strongest;
+      return R.dOf(j) + (R.dOf(e) - R.dOf(j)) / 2.0;
     }
-    *hit = kUnobserved;
-    return d + dir * o.default_half_width_m;
-  };
-  for (auto& lane : res.lanes) {
+    return R.dOf(j) - dir * R.res / 2.0;
+  }
+  *hit = kUnobserved;
+  return d + dir * o.default_half_width_m;
+}
+
+// Way-points and lane boundaries (METHOD.md section 4, step 5): way-points every
+// waypoint_spacing_m along each lane's centre line, each boundary probed there on both sides
+// (asymmetric, follows the drivable area) and typed by the classes its probes hit most.
+void probeBoundaries(const Raster& R, const FrenetFrame& frame, const ExplorerOptions& o, std::vector<Lane>* lanes) {
+  for (auto& lane : *lanes) {
     const double len = lane.s_end - lane.s_begin;
     const int n = std::max(2, static_cast<int>(std::ceil(len / o.waypoint_spacing_m)) + 1);
     int count[2][8] = {};
@@ -740,13 +786,13 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
       const double s = lane.s_begin + len * k / (n - 1);
       const double d = lane.centre.d(s);
       lane.waypoint_s.push_back(s);
-      lane.waypoints.push_back(frame->toEnu(s, d));
+      lane.waypoints.push_back(frame.toEnu(s, d));
       for (int side = 0; side < 2; ++side) {
         uint8_t hit = kUnobserved;
-        const double db = probe(s, d, side == 0 ? 1 : -1, &hit);
+        const double db = probeBoundary(R, o, s, d, side == 0 ? 1 : -1, &hit);
         Boundary& b = side == 0 ? lane.left : lane.right;
         b.d.push_back(db);
-        b.points.push_back(frame->toEnu(s, db));
+        b.points.push_back(frame.toEnu(s, db));
         ++count[side][hit];
       }
     }
@@ -760,15 +806,58 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
       else b.type = map::LineType::kVirtual;
     }
   }
-  // Index from the left among the lanes present at each lane's middle.
-  for (auto& lane : res.lanes) {
+}
+
+// Index from the left among the lanes present at each lane's middle.
+void indexLanesFromLeft(std::vector<Lane>* lanes) {
+  for (auto& lane : *lanes) {
     const double sm = 0.5 * (lane.s_begin + lane.s_end);
     int idx = 0;
-    for (const auto& other : res.lanes) {
+    for (const auto& other : *lanes) {
       if (&other != &lane && sm >= other.s_begin && sm <= other.s_end && other.centre.d(sm) > lane.centre.d(sm)) ++idx;
     }
     lane.index_from_left = idx;
   }
+}
+
+}  // namespace
+
+ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road_in, const ExplorerOptions& o,
+                              const std::optional<EgoPose>& ego, int history_stride) {
+  o.validate();
+  if (road_in.polyline.size() < 2) throw LanesError("road " + std::to_string(road_in.road_id) + " has no polyline");
+  ExplorationResult res;
+  res.road_id = road_in.road_id;
+  res.from_node = road_in.from_node;
+  res.to_node = road_in.to_node;
+  auto frame = std::make_shared<FrenetFrame>(road_in.polyline, o.frame_spacing_m, o.frame_smoothing_m);
+  res.frame = frame;
+  const RoadGeometry road = explorationStretch(road_in, frame->length(), o);
+  const double s_stop = road.s_end;
+  double s_start = road.s_begin;
+  if (ego) s_start = std::clamp(frame->toFrenet(ego->position).x(), s_start, s_stop);
+  if (!(s_stop - s_start > 1.0)) throw LanesError("road " + std::to_string(road.road_id) + " has no length to explore");
+  // A lane must cover most of a short road's stretch, else min_lane_length_m.
+  const double min_lane_length = std::min(o.min_lane_length_m, 0.8 * (road.s_end - road.s_begin));
+
+  // 1. The straightened raster.
+  auto t0 = Clock::now();
+  const Raster R = buildRaster(grid, *frame, road, o);
+  for (uint8_t c : R.code) ++res.stats.raster_cells[c];
+  res.stats.raster_s = since(t0);
+
+  // 2-3. The particle filter, DBSCAN and lane tracks.
+  t0 = Clock::now();
+  ParticleFilter filter(R, o, s_start, s_stop, &res.stats);
+  filter.seedStartStrip();
+  filter.run(history_stride > 0 ? &res.history : nullptr, history_stride);
+  res.stats.filter_s = since(t0);
+
+  // 4-5. Centre lines, way-points, boundaries.
+  t0 = Clock::now();
+  res.lanes = fitLanes(filter.tracks(), filter.bins(), road, s_stop, min_lane_length, o);
+  probeBoundaries(R, *frame, o, &res.lanes);
+  indexLanesFromLeft(&res.lanes);
   res.stats.fit_s = since(t0);
   return res;
 }

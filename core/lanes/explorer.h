@@ -1,4 +1,7 @@
-// Lane exploration on one closed atomic road (METHOD.md section 4, Algorithm 1).
+// Lane exploration on one closed atomic road (METHOD.md section 4, Algorithm 1). exploreRoad runs
+// the steps below, each a function of explorer.cc named after it: buildRaster (1); ParticleFilter's
+// seedStartStrip, then per step predict, kill, clusterAndTrack, resample and births (2-3);
+// fitLanes (4); probeBoundaries and indexLanesFromLeft (5).
 //
 // 1. The road's BEV evidence is resampled into a straightened raster in the road's Frenet frame
 //    (s along the skeleton, d to the left), each cell classified once: unobserved, drivable,

@@ -3,7 +3,7 @@
 # demo drive (West Oakland, 60 s, seed 1) or takes --drive DIR, runs config/launch/demo.yaml
 # (viewer included, segmenter --oracle) in a private network namespace with a page's load on the
 # viewer (curl on the event stream, the trail and state once a second, the lanes and OSM roads
-# every 5 s, the BEV when it changes: what web/viewer/src/app.js fetches), and prints the
+# every 5 s, the BEV picture every second (the open road's changes at ~1 Hz): what web/viewer/src/app.js fetches), and prints the
 # viewer's line of lanemap-graph-report (CPU share of one core, mean and max over its STATUS, from
 # the run's recording) plus its HTTP request count. Figures only, no thresholds.
 #
@@ -25,9 +25,10 @@ if [ "${1:-}" = "--in-netns" ]; then
     events=$!
     i=0
     while kill -0 "$launch" 2> /dev/null; do
-      curl -s -o /dev/null "$url/api/state" -o /dev/null "$url/api/trail?from=$i" || true
+      # The BEV picture changes about once a second while a road is open (BEV_OPEN): every poll.
+      curl -s -o /dev/null "$url/api/state" -o /dev/null "$url/api/trail?from=$i" -o /dev/null "$url/api/bev.png" || true
       if [ $((i % 5)) -eq 0 ]; then
-        curl -s -o /dev/null "$url/api/lanes.geojson" -o /dev/null "$url/api/skeleton.geojson" -o /dev/null "$url/api/bev.png" || true
+        curl -s -o /dev/null "$url/api/lanes.geojson" -o /dev/null "$url/api/skeleton.geojson" || true
       fi
       i=$((i + 1))
       sleep 1

@@ -32,20 +32,20 @@ bool segmentsCross(const Vector2d& a, const Vector2d& b, const Vector2d& c, cons
 
 }  // namespace
 
-Vector2d ConnectionCurve::point(double a) const {
+Vector2d BezierConnection::point(double a) const {
   const double b = 1.0 - a;
   if (quadratic) return b * b * control[0] + 2.0 * a * b * control[1] + a * a * control[2];
   return b * b * b * control[0] + 3.0 * b * b * a * control[1] + 3.0 * b * a * a * control[2] + a * a * a * control[3];
 }
 
-Vector2d ConnectionCurve::derivative(double a) const {
+Vector2d BezierConnection::derivative(double a) const {
   const double b = 1.0 - a;
   if (quadratic) return 2.0 * b * (control[1] - control[0]) + 2.0 * a * (control[2] - control[1]);
   return 3.0 * b * b * (control[1] - control[0]) + 6.0 * a * b * (control[2] - control[1]) +
          3.0 * a * a * (control[3] - control[2]);
 }
 
-std::vector<Vector2d> ConnectionCurve::sample(double step_m) const {
+std::vector<Vector2d> BezierConnection::sample(double step_m) const {
   double polygon = 0.0;  // control polygon length: an upper bound of the curve length
   for (size_t i = 1; i < control.size(); ++i) polygon += (control[i] - control[i - 1]).norm();
   const double approx = 0.5 * (polygon + (control.back() - control.front()).norm());
@@ -58,12 +58,12 @@ std::vector<Vector2d> ConnectionCurve::sample(double step_m) const {
   return out;
 }
 
-ConnectionCurve connectionCurve(const Vector2d& p0, const Vector2d& t0_in, const Vector2d& p2,
+BezierConnection bezierConnection(const Vector2d& p0, const Vector2d& t0_in, const Vector2d& p2,
                                 const Vector2d& t2_in, const CurveOptions& o) {
   const Vector2d t0 = unit(t0_in, unit(p2 - p0, Vector2d::UnitX()));
   const Vector2d t2 = unit(t2_in, t0);
   const double chord = (p2 - p0).norm();
-  ConnectionCurve c;
+  BezierConnection c;
   // Tangent lines p0 + a t0 and p2 - b t2 meet where a t0 + b t2 = p2 - p0.
   const double det = cross(t0, t2);
   if (std::abs(det) > std::sin(o.parallel_deg * kPi / 180.0) && chord > 1e-6) {
@@ -84,7 +84,7 @@ ConnectionCurve connectionCurve(const Vector2d& p0, const Vector2d& t0_in, const
 
 std::vector<Vector2d> connectionPolyline(const Vector2d& p0, const Vector2d& t0_in, const Vector2d& p2,
                                          const Vector2d& t2_in, const CurveOptions& o) {
-  const ConnectionCurve c = connectionCurve(p0, t0_in, p2, t2_in, o);
+  const BezierConnection c = bezierConnection(p0, t0_in, p2, t2_in, o);
   if (!c.quadratic) return c.sample(o.step_m);
   const Vector2d t0 = unit(c.control[1] - p0, Vector2d::UnitX());
   const Vector2d t2 = unit(p2 - c.control[1], t0);

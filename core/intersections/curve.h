@@ -24,7 +24,7 @@ struct CurveOptions {
 };
 
 // A connection from p0 (leaving with heading t0) to p2 (arriving with heading t2).
-struct ConnectionCurve {
+struct BezierConnection {
   bool quadratic = false;  // else the cubic fallback
   // Control points: quadratic uses c[0] = P0, c[1] = P, c[2] = P2; cubic c[0..3].
   std::vector<Eigen::Vector2d> control;
@@ -34,12 +34,12 @@ struct ConnectionCurve {
   std::vector<Eigen::Vector2d> sample(double step_m) const;
 };
 
-ConnectionCurve connectionCurve(const Eigen::Vector2d& p0, const Eigen::Vector2d& t0,
+BezierConnection bezierConnection(const Eigen::Vector2d& p0, const Eigen::Vector2d& t0,
                                 const Eigen::Vector2d& p2, const Eigen::Vector2d& t2,
                                 const CurveOptions& options = {});
 
 // The connection as a polyline with points every step_m at most (ends exact). Where the two
-// tangent lines meet in front of both ends (connectionCurve's quadratic case): a straight piece,
+// tangent lines meet in front of both ends (bezierConnection's quadratic case): a straight piece,
 // a circular arc and a straight piece, the arc's tangent length being the shorter leg, so its
 // radius is the largest any curve between the two tangent lines can keep everywhere (a quadratic
 // Bezier on the same legs turns up to 1.4 times tighter at its apex and much tighter near the end

@@ -271,54 +271,6 @@ class Builder {
     return only_applies && !only_ok;
   }
 
-  // (in lane, out lane) pairs of one movement.
-  std::vector<std::pair<int, int>> pairLanes(const Approach& a, const Approach& d, TurnDirection movement,
-                                             bool uturn) const {
-    std::vector<std::pair<int, int>> out;
-    const int nin = static_cast<int>(a.lanes.size()), nout = static_cast<int>(d.lanes.size());
-    bool any_specified = false;
-    for (const auto& l : a.lanes) any_specified |= l.moves.specified;
-    std::vector<int> cand;
-    const auto alignLeft = [&] {
-      for (int j = 0; j < static_cast<int>(cand.size()) && j < nout; ++j) out.emplace_back(cand[j], j);
-    };
-    const auto alignRight = [&] {
-      for (int j = 0; j < static_cast<int>(cand.size()) && j < nout; ++j) {
-        out.emplace_back(cand[cand.size() - 1 - j], nout - 1 - j);
-      }
-    };
-    if (uturn) {
-      for (int i = 0; i < nin; ++i) {
-        if (a.lanes[i].moves.reverse) cand.push_back(i);
-      }
-      if (cand.empty()) cand.push_back(o_.right_hand_traffic ? 0 : nin - 1);
-      cand.resize(1);
-      o_.right_hand_traffic ? alignLeft() : alignRight();
-      return out;
-    }
-    if (movement == TurnDirection::kStraight) {
-      for (int i = 0; i < nin; ++i) {
-        const auto& m = a.lanes[i].moves;
-        if (!m.specified || m.straight) cand.push_back(i);
-      }
-      o_.right_hand_traffic ? alignLeft() : alignRight();
-      return out;
-    }
-    const bool left = movement == TurnDirection::kLeft;
-    for (int i = 0; i < nin; ++i) {
-      const auto& m = a.lanes[i].moves;
-      if (m.specified && (left ? m.left : m.right)) cand.push_back(i);
-    }
-    if (cand.empty()) {
-      const int edge = left ? 0 : nin - 1;
-      // Tagged lanes with no such movement: only an untagged edge lane may turn.
-      if (any_specified && a.lanes[edge].moves.specified) return out;
-      cand.push_back(edge);
-    }
-    left ? alignLeft() : alignRight();
-    return out;
-  }
-
   void connectApproach(const Approach& a) {
     std::vector<int> connections(a.lanes.size(), 0);
     const Approach* straightest = nullptr;
@@ -335,7 +287,9 @@ class Builder {
         best_dot = a.tangent.dot(d.tangent);
         straightest = &d;
       }
-      for (const auto& [i, o] : pairLanes(a, d, movement, uturn)) {
+      std::vector<Movements> moves;
+      for (const auto& l : a.lanes) moves.push_back(l.moves);
+      for (const auto& [i, o] : pairLanes(moves, static_cast<int>(d.lanes.size()), movement, uturn, o_.right_hand_traffic)) {
         if (connect(a, i, d, o, movement, false)) ++connections[i];
       }
     }
@@ -363,8 +317,8 @@ class Builder {
   bool connect(const Approach& a, int i, const Approach& d, int o, TurnDirection movement, bool orphan) {
     const LaneEnd& from = a.lanes[i];
     const LaneEnd& to = d.lanes[o];
-    const ConnectionCurve curve =
-        connectionCurve(from.centre.head<2>(), from.tangent, to.centre.head<2>(), to.tangent, o_.curve);
+    const BezierConnection curve =
+        bezierConnection(from.centre.head<2>(), from.tangent, to.centre.head<2>(), to.tangent, o_.curve);
     // The same construction as the bounds' (connectionPolyline), so the centre stays between them.
     const std::vector<Vector2d> pts =
         connectionPolyline(from.centre.head<2>(), from.tangent, to.centre.head<2>(), to.tangent, o_.curve);
@@ -434,6 +388,54 @@ class Builder {
 };
 
 }  // namespace
+
+std::vector<std::pair<int, int>> pairLanes(const std::vector<Movements>& in_lanes, int n_out, TurnDirection movement,
+                                           bool uturn, bool right_hand_traffic) {
+  std::vector<std::pair<int, int>> out;
+  const int nin = static_cast<int>(in_lanes.size()), nout = n_out;
+  if (nin == 0 || nout <= 0) return out;
+  bool any_specified = false;
+  for (const auto& m : in_lanes) any_specified |= m.specified;
+  std::vector<int> cand;
+  const auto alignLeft = [&] {
+    for (int j = 0; j < static_cast<int>(cand.size()) && j < nout; ++j) out.emplace_back(cand[j], j);
+  };
+  const auto alignRight = [&] {
+    for (int j = 0; j < static_cast<int>(cand.size()) && j < nout; ++j) {
+      out.emplace_back(cand[cand.size() - 1 - j], nout - 1 - j);
+    }
+  };
+  if (uturn) {
+    for (int i = 0; i < nin; ++i) {
+      if (in_lanes[i].reverse) cand.push_back(i);
+    }
+    if (cand.empty()) cand.push_back(right_hand_traffic ? 0 : nin - 1);
+    cand.resize(1);
+    right_hand_traffic ? alignLeft() : alignRight();
+    return out;
+  }
+  if (movement == TurnDirection::kStraight) {
+    for (int i = 0; i < nin; ++i) {
+      const auto& m = in_lanes[i];
+      if (!m.specified || m.straight) cand.push_back(i);
+    }
+    right_hand_traffic ? alignLeft() : alignRight();
+    return out;
+  }
+  const bool left = movement == TurnDirection::kLeft;
+  for (int i = 0; i < nin; ++i) {
+    const auto& m = in_lanes[i];
+    if (m.specified && (left ? m.left : m.right)) cand.push_back(i);
+  }
+  if (cand.empty()) {
+    const int edge = left ? 0 : nin - 1;
+    // Tagged lanes with no such movement: only an untagged edge lane may turn.
+    if (any_specified && in_lanes[edge].specified) return out;
+    cand.push_back(edge);
+  }
+  left ? alignLeft() : alignRight();
+  return out;
+}
 
 Movements parseTurnLane(const std::string& entry) {
   Movements m;

@@ -36,6 +36,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace lanemap::intersections {
@@ -82,6 +83,17 @@ struct Movements {
 Movements parseTurnLane(const std::string& entry);
 // The turn:lanes entries of a road in its driving direction, left to right; empty when untagged.
 std::vector<Movements> turnLanes(const skeleton::AtomicRoad& road);
+
+// The lane pairing rules (METHOD.md section 5) of one movement: (in lane, out lane) index pairs,
+// both counted from the left, from an approach whose lanes allow `in_lanes` (left to right, from
+// turn:lanes; unspecified where untagged) to a road with n_out lanes. Straight: the lanes that may
+// go straight, aligned at the kerb-far side (the left in right-hand traffic); a turn: the lanes
+// tagged for it, else the edge lane on its side unless that one is tagged otherwise, aligned on
+// the turn's side (a double left turn fills the two leftmost out lanes); a U-turn: one lane (tagged
+// reverse, else the innermost) into the innermost out lane. Extra lanes on either side stay
+// unpaired. The lane mapper's assumption, not the simulator's truth (core/sim has its own rules).
+std::vector<std::pair<int, int>> pairLanes(const std::vector<Movements>& in_lanes, int n_out, map::TurnDirection movement,
+                                           bool uturn, bool right_hand_traffic);
 
 struct Connection {
   int64_t lanelet_id = -1;              // the intersection lanelet

@@ -1262,7 +1262,7 @@ class Builder {
   bool connect(const skeleton::Intersection& in, const LaneEnd& a, const LaneEnd& b, TurnDirection turn, double* radius) {
     intersections::CurveOptions curve_options;
     curve_options.step_m = 0.5;
-    const auto curve = intersections::connectionCurve(a.centre, a.tangent, b.centre, b.tangent, curve_options)
+    const auto curve = intersections::bezierConnection(a.centre, a.tangent, b.centre, b.tangent, curve_options)
                            .sample(curve_options.step_m);
     const auto bounds = intersections::connectorBounds(a.left, a.right, a.tangent, b.left, b.right, b.tangent,
                                                        curve_options);

@@ -68,7 +68,7 @@ struct MapBuilder {
     const Vector2d p0 = la->centre.back().head<2>(), p2 = lb->centre.front().head<2>();
     const Vector2d t0 = (p0 - la->centre[la->centre.size() - 2].head<2>()).normalized();
     const Vector2d t2 = (lb->centre[1].head<2>() - p2).normalized();
-    const auto curve = lanemap::intersections::connectionCurve(p0, t0, p2, t2);
+    const auto curve = lanemap::intersections::bezierConnection(p0, t0, p2, t2);
     const int64_t ids[4] = {la->left_id, la->right_id, lb->left_id, lb->right_id};
     const int64_t x = lane(curve.sample(0.5), -1, true);  // (la, lb invalid from here)
     // Successors share end points (Lanelet2 finds them so in a file): snap the bounds' ends.

@@ -25,7 +25,7 @@ namespace {
 
 using Eigen::Vector2d;
 using lanemap::intersections::buildIntersection;
-using lanemap::intersections::connectionCurve;
+using lanemap::intersections::bezierConnection;
 using lanemap::intersections::IntersectionOptions;
 using lanemap::intersections::IntersectionResult;
 using lanemap::map::TurnDirection;
@@ -83,7 +83,7 @@ std::vector<Pair> pairs(Net& net, const IntersectionOptions& o = {}, bool pocket
 // ------------------------------------------------------------------ curve
 
 TEST(IntersectionCurve, RightAngleIsTheQuadraticThroughTheTangentIntersection) {
-  const auto c = connectionCurve({0, 0}, {1, 0}, {10, 10}, {0, 1});
+  const auto c = bezierConnection({0, 0}, {1, 0}, {10, 10}, {0, 1});
   ASSERT_TRUE(c.quadratic);
   EXPECT_NEAR((c.control[1] - Vector2d(10, 0)).norm(), 0.0, 1e-12);
   // B(1/2) = P0/4 + P/2 + P2/4 = (7.5, 2.5)
@@ -101,7 +101,7 @@ TEST(IntersectionCurve, RightAngleIsTheQuadraticThroughTheTangentIntersection) {
 
 TEST(IntersectionCurve, ParallelTangentsFallBackToACubic) {
   // A lane shift: parallel tangents, no intersection point.
-  const auto c = connectionCurve({0, 0}, {1, 0}, {20, 3}, {1, 0});
+  const auto c = bezierConnection({0, 0}, {1, 0}, {20, 3}, {1, 0});
   ASSERT_FALSE(c.quadratic);
   ASSERT_EQ(c.control.size(), 4u);
   const double chord = std::hypot(20.0, 3.0);
@@ -115,7 +115,7 @@ TEST(IntersectionCurve, ParallelTangentsFallBackToACubic) {
 
 TEST(IntersectionCurve, ControlPointBehindAnEndFallsBackToACubic) {
   // Tangent lines (0,0)+a(1,0) and (-5,10)-b(0,1) meet at (-5,0): a = -5, behind P0.
-  const auto c = connectionCurve({0, 0}, {1, 0}, {-5, 10}, {0, 1});
+  const auto c = bezierConnection({0, 0}, {1, 0}, {-5, 10}, {0, 1});
   EXPECT_FALSE(c.quadratic);
   EXPECT_NEAR(c.derivative(0.0).normalized().dot(Vector2d(1, 0)), 1.0, 1e-12);
   EXPECT_NEAR(c.derivative(1.0).normalized().dot(Vector2d(0, 1)), 1.0, 1e-12);
@@ -147,7 +147,7 @@ TEST(IntersectionCurve, BoundsOfASharpTurnStayOnTheirSides) {
   ll.kind = lanemap::map::LaneletKind::kIntersection;
   ll.left_id = 1;
   ll.right_id = 2;
-  ll.centre = lift(connectionCurve(c0, t0, c2, t2).sample(0.5));
+  ll.centre = lift(bezierConnection(c0, t0, c2, t2).sample(0.5));
   m.lanelets.push_back(ll);
   EXPECT_TRUE(lanemap::io::orientationProblems(m).empty());
   // The outer (left) bound of a right turn is the longer one.

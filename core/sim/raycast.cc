@@ -164,6 +164,23 @@ const std::vector<int>& ObstacleFan::candidates(const Eigen::Vector3d& d) const 
   return bins_[((k % nbins) + nbins) % nbins];
 }
 
+// The ray's hit at range `best` (none beyond max_range): the obstacle found, unless the ground
+// (at ground_range) is as near; a ground hit carries the surface sampled there.
+RayHit finishHit(RayHit hit, double best, double ground_range, const World& world, const Eigen::Vector3d& o,
+                 const Eigen::Vector3d& d, double max_range) {
+  if (!(best <= max_range)) return hit;
+  hit.hit = true;
+  hit.range = best;
+  hit.point = o + best * d;
+  if (!hit.is_obstacle || best >= ground_range) {
+    hit.is_obstacle = false;
+    hit.obstacle = nullptr;
+    hit.normal = Eigen::Vector3d::UnitZ();
+    hit.ground = world.sample(hit.point.x(), hit.point.y());
+  }
+  return hit;
+}
+
 RayHit raycast(const World& world, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range,
                const ObstacleFan& fan, const RaycastOptions& opt) {
   RayHit hit;
@@ -182,17 +199,7 @@ RayHit raycast(const World& world, const Eigen::Vector3d& o, const Eigen::Vector
       }
     }
   }
-  if (!(best <= max_range)) return hit;
-  hit.hit = true;
-  hit.range = best;
-  hit.point = o + best * d;
-  if (!hit.is_obstacle || best >= ground_range) {
-    hit.is_obstacle = false;
-    hit.obstacle = nullptr;
-    hit.normal = Eigen::Vector3d::UnitZ();
-    hit.ground = world.sample(hit.point.x(), hit.point.y());
-  }
-  return hit;
+  return finishHit(hit, best, ground_range, world, o, d, max_range);
 }
 
 RayHit raycast(const World& world, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
@@ -227,17 +234,7 @@ RayHit raycast(const World& world, const Eigen::Vector3d& o, const Eigen::Vector
     }
   }
 
-  if (!(best <= max_range)) return hit;
-  hit.hit = true;
-  hit.range = best;
-  hit.point = o + best * d;
-  if (!hit.is_obstacle || best >= ground_range) {
-    hit.is_obstacle = false;
-    hit.obstacle = nullptr;
-    hit.normal = Eigen::Vector3d::UnitZ();
-    hit.ground = world.sample(hit.point.x(), hit.point.y());
-  }
-  return hit;
+  return finishHit(hit, best, ground_range, world, o, d, max_range);
 }
 
 Eigen::Vector3d groundNormal(const World& world, double east, double north, double h) {

@@ -164,6 +164,8 @@ const std::vector<int>& ObstacleFan::candidates(const Eigen::Vector3d& d) const 
   return bins_[((k % nbins) + nbins) % nbins];
 }
 
+namespace {
+
 // The ray's hit at range `best` (none beyond max_range): the obstacle found, unless the ground
 // (at ground_range) is as near; a ground hit carries the surface sampled there.
 RayHit finishHit(RayHit hit, double best, double ground_range, const World& world, const Eigen::Vector3d& o,
@@ -180,6 +182,8 @@ RayHit finishHit(RayHit hit, double best, double ground_range, const World& worl
   }
   return hit;
 }
+
+}  // namespace
 
 RayHit raycast(const World& world, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range,
                const ObstacleFan& fan, const RaycastOptions& opt) {

@@ -368,6 +368,13 @@ void BevBuilder::roadClosed(int64_t road_id, int64_t utime) {
   finishCloses(false);
 }
 
+bool BevBuilder::restoreRoad(int64_t road_id, BevGrid grid, int64_t utime) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!accumulator_.restore(road_id, std::move(grid), utime)) return false;
+  ++stats_.roads_opened;
+  return true;
+}
+
 void BevBuilder::roadsAbandoned(int64_t) {
   std::lock_guard<std::mutex> lock(mutex_);
   for (int64_t id : accumulator_.activeRoads()) {

@@ -125,6 +125,10 @@ class BevBuilder {
   void roadEntered(int64_t road_id, int64_t utime);
   void roadClosed(int64_t road_id, int64_t utime);
   void roadsAbandoned(int64_t utime);
+  // A road recovered from its checkpoint after a restart (bev_store.h): active again with that
+  // grid, frames go on into it. False for an unknown road, one already active, or a grid of
+  // another resolution.
+  bool restoreRoad(int64_t road_id, BevGrid grid, int64_t utime);
   // End of input: waits for the mesh worker, hands over roads that are closing.
   void finish();
 

@@ -1,6 +1,13 @@
 #include "core/bev/bev_store.h"
 
+#include "core/io/atomic_file.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <regex>
 
 namespace lanemap::bev {
 
@@ -45,6 +52,58 @@ StoredRoad storeRoad(const std::string& store, const RoadBev& road) {
     s.height = box.sizes().y();
   }
   return s;
+}
+
+namespace {
+std::filesystem::path checkpointDir(const std::string& store) { return std::filesystem::path(store) / "bev" / "open"; }
+std::filesystem::path checkpointMeta(const std::string& store, int64_t road_id) {
+  return checkpointDir(store) / ("road_" + std::to_string(road_id) + ".json");
+}
+}  // namespace
+
+std::string checkpointPath(const std::string& store, int64_t road_id) {
+  return (checkpointDir(store) / ("road_" + std::to_string(road_id) + ".bev")).string();
+}
+
+void storeCheckpoint(const std::string& store, const RoadBev& road, int64_t last_frame_utime) {
+  std::filesystem::create_directories(checkpointDir(store));
+  road.grid.save(checkpointPath(store, road.road_id));
+  const nlohmann::json meta{{"road_id", road.road_id}, {"last_frame_utime", last_frame_utime}, {"frames", road.grid.frames()}};
+  io::writeFileAtomically(checkpointMeta(store, road.road_id).string(), meta.dump() + "\n");
+}
+
+void removeCheckpoint(const std::string& store, int64_t road_id) {
+  std::error_code ec;
+  std::filesystem::remove(checkpointPath(store, road_id), ec);
+  std::filesystem::remove(checkpointMeta(store, road_id), ec);
+}
+
+std::vector<Checkpoint> loadCheckpoints(const std::string& store, std::vector<std::string>* errors) {
+  std::vector<Checkpoint> out;
+  std::error_code ec;
+  if (!std::filesystem::is_directory(checkpointDir(store), ec)) return out;
+  const std::regex name("road_(-?[0-9]{1,19})\\.bev");
+  for (const auto& entry : std::filesystem::directory_iterator(checkpointDir(store), ec)) {
+    std::smatch m;
+    const std::string fname = entry.path().filename().string();
+    if (!std::regex_match(fname, m, name)) continue;
+    try {
+      Checkpoint c;
+      c.road_id = std::stoll(m[1]);
+      c.path = entry.path().string();
+      c.grid = BevGrid::load(c.path);
+      std::ifstream meta(checkpointMeta(store, c.road_id));
+      if (meta) {
+        const auto j = nlohmann::json::parse(meta, nullptr, false);
+        if (j.is_object() && j.value("road_id", int64_t{-1}) == c.road_id) c.last_frame_utime = j.value("last_frame_utime", int64_t{0});
+      }
+      out.push_back(std::move(c));
+    } catch (const std::exception& e) {
+      if (errors) errors->push_back(entry.path().string() + ": " + e.what());
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const Checkpoint& a, const Checkpoint& b) { return a.road_id < b.road_id; });
+  return out;
 }
 
 }  // namespace lanemap::bev

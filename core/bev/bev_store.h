@@ -2,6 +2,12 @@
 // written atomically), so a crash loses nothing and the lane mapper reads it when BEV_ROAD says so.
 // A road driven again is merged into its stored grid (counts add up, frames too): more passes,
 // more evidence.
+//
+// Checkpoints (crash recovery): the grid of a road still being driven goes to
+// <store>/bev/open/road_<id>.bev every few seconds (lanemap-bev-builder, `checkpoint` in its
+// config), with road_<id>.json beside it (the newest frame's time and the frame count); a BEV
+// builder that restarts mid-road carries on from it, and the checkpoint is removed when the road is
+// stored or given up. Each file is written atomically and durably (io::writeFileAtomically).
 #pragma once
 
 #include "core/bev/bev_grid.h"
@@ -10,6 +16,7 @@
 #include <Eigen/Core>
 
 #include <string>
+#include <vector>
 
 namespace lanemap::bev {
 
@@ -27,5 +34,21 @@ struct StoredRoad {
 std::string roadGridPath(const std::string& store, int64_t road_id);
 // Writes (or merges into) the road's file; throws BevError / std::runtime_error on failure.
 StoredRoad storeRoad(const std::string& store, const RoadBev& road);
+
+struct Checkpoint {
+  int64_t road_id = -1;
+  int64_t last_frame_utime = 0;  // newest frame in the grid (0: unknown)
+  BevGrid grid;
+  std::string path;
+};
+std::string checkpointPath(const std::string& store, int64_t road_id);
+// Writes the road's checkpoint (grid, then its JSON); throws on failure. last_frame_utime: the
+// newest frame projected into it.
+void storeCheckpoint(const std::string& store, const RoadBev& road, int64_t last_frame_utime);
+// Removes a road's checkpoint files (none: nothing happens).
+void removeCheckpoint(const std::string& store, int64_t road_id);
+// Every readable checkpoint in the store, by road id; one that does not load is named in *errors
+// (with why) and left on disk for a person to look at.
+std::vector<Checkpoint> loadCheckpoints(const std::string& store, std::vector<std::string>* errors = nullptr);
 
 }  // namespace lanemap::bev

@@ -125,6 +125,16 @@ bool RoadBevAccumulator::open(int64_t road_id, int64_t utime) {
   return true;
 }
 
+bool RoadBevAccumulator::restore(int64_t road_id, BevGrid grid, int64_t utime) {
+  const auto* road = skeleton_.road(road_id);
+  if (!road || active_.count(road_id)) return false;
+  if (grid.resolution() != options_.grid.resolution_m || grid.options().tile_cells != options_.grid.tile_cells) return false;
+  RoadBev r{road_id, road->from, road->to, utime, 0,
+            std::make_shared<const Corridor>(Corridor::forRoad(skeleton_, *road, options_.corridor)), std::move(grid)};
+  active_.emplace(road_id, std::move(r));
+  return true;
+}
+
 std::optional<RoadBev> RoadBevAccumulator::close(int64_t road_id, int64_t utime) {
   auto it = active_.find(road_id);
   if (it == active_.end()) return std::nullopt;

@@ -84,6 +84,9 @@ class RoadBevAccumulator {
   // Starts a road (replaying the history into it). Returns false for an unknown road or one already
   // active.
   bool open(int64_t road_id, int64_t utime);
+  // Makes a road active again with the grid it had (a checkpoint read after a restart); false for
+  // an unknown road, one already active, or a grid of another resolution or tile size.
+  bool restore(int64_t road_id, BevGrid grid, int64_t utime);
   // Ends a road and hands its grid over; nullopt when it is not active.
   std::optional<RoadBev> close(int64_t road_id, int64_t utime);
   // Ends a road without handing it over (it was never completed); false when not active.

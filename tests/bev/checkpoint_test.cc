@@ -1,0 +1,85 @@
+// Checkpoints of open roads (core/bev/bev_store.h) and restoring them into the accumulator
+// (RoadBevAccumulator::restore, BevBuilder::restoreRoad): what a BEV builder that restarts
+// mid-road carries on from.
+#include "core/bev/bev_builder.h"
+#include "core/bev/bev_store.h"
+#include "core/bev/road_bev.h"
+#include "core/osm/osm_data.h"
+#include "core/skeleton/skeleton.h"
+#include "tests/common/sim_drive.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace {
+
+using namespace lanemap;
+namespace lt = lanemap::testing;
+
+bev::RoadBev roadWithEvidence(const skeleton::Skeleton& sk, int64_t road_id, int frames) {
+  bev::RoadBevAccumulator acc(sk);
+  EXPECT_TRUE(acc.open(road_id, 1000));
+  bev::RoadBev r = *acc.close(road_id, 2000);
+  for (int i = 0; i < 30; ++i) {
+    r.grid.add({i, 7}, bev::Layer::kObserved, 3);
+    r.grid.add({i, 7}, bev::Layer::kDrivable, 2);
+  }
+  for (int f = 0; f < frames; ++f) r.grid.addFrame();
+  return r;
+}
+
+TEST(Checkpoint, StoredLoadedAndRemovedWithTheNewestFrameTime) {
+  const auto sk = skeleton::Skeleton::build(osm::readOsm(std::string(LANEMAP_DATA_DIR) + "/osm/west-oakland.osm"));
+  lt::TempDir store("checkpoint");
+  EXPECT_TRUE(bev::loadCheckpoints(store.str()).empty());  // no bev/open/ folder: nothing
+  const int64_t a = sk.roads()[0].id, b = sk.roads()[1].id;
+  bev::storeCheckpoint(store.str(), roadWithEvidence(sk, a, 12), 1'700'000'000'500'000);
+  bev::storeCheckpoint(store.str(), roadWithEvidence(sk, b, 3), 0);
+  EXPECT_EQ(bev::checkpointPath(store.str(), a), store.str("bev/open/road_" + std::to_string(a) + ".bev"));
+  // A newer checkpoint of a road replaces the older one.
+  bev::storeCheckpoint(store.str(), roadWithEvidence(sk, a, 20), 1'700'000'001'000'000);
+  auto loaded = bev::loadCheckpoints(store.str());
+  ASSERT_EQ(loaded.size(), 2u);
+  const auto& ca = loaded[0].road_id == a ? loaded[0] : loaded[1];
+  EXPECT_EQ(ca.road_id, a);
+  EXPECT_EQ(ca.grid.frames(), 20);
+  EXPECT_EQ(ca.last_frame_utime, 1'700'000'001'000'000);
+  EXPECT_EQ(ca.grid.count(bev::BevGrid::Cell(5, 7), bev::Layer::kDrivable), 2);
+  // An unreadable checkpoint is named, the others still load.
+  { std::ofstream(store.str("bev/open/road_999.bev")) << "not a grid"; }
+  std::vector<std::string> errors;
+  loaded = bev::loadCheckpoints(store.str(), &errors);
+  EXPECT_EQ(loaded.size(), 2u);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("road_999.bev"), std::string::npos) << errors[0];
+  bev::removeCheckpoint(store.str(), a);
+  bev::removeCheckpoint(store.str(), 999);
+  bev::removeCheckpoint(store.str(), 12345);  // none: nothing happens
+  loaded = bev::loadCheckpoints(store.str());
+  ASSERT_EQ(loaded.size(), 1u);
+  EXPECT_EQ(loaded[0].road_id, b);
+  EXPECT_FALSE(std::filesystem::exists(store.str("bev/open/road_" + std::to_string(a) + ".json")));
+}
+
+TEST(Checkpoint, ARestoredRoadIsActiveAgainAndGoesOnCollecting) {
+  const auto sk = skeleton::Skeleton::build(osm::readOsm(std::string(LANEMAP_DATA_DIR) + "/osm/west-oakland.osm"));
+  const int64_t a = sk.roads()[0].id;
+  bev::RoadBevAccumulator acc(sk);
+  bev::RoadBev saved = roadWithEvidence(sk, a, 12);
+  EXPECT_FALSE(acc.restore(-77, saved.grid, 0));  // unknown road
+  EXPECT_FALSE(acc.restore(a, bev::BevGrid(bev::BevGridOptions{0.2, 128}), 0));  // another resolution
+  ASSERT_TRUE(acc.restore(a, saved.grid, 5000));
+  EXPECT_FALSE(acc.restore(a, saved.grid, 5000));  // already active
+  ASSERT_NE(acc.active(a), nullptr);
+  EXPECT_EQ(acc.active(a)->grid.frames(), 12);
+  EXPECT_EQ(acc.active(a)->from_node, sk.road(a)->from);
+  // Closing hands over the restored evidence.
+  const auto closed = acc.close(a, 9000);
+  ASSERT_TRUE(closed);
+  EXPECT_EQ(closed->grid.count(bev::BevGrid::Cell(3, 7), bev::Layer::kObserved), 3);
+  EXPECT_EQ(closed->opened_utime, 5000);
+}
+
+}  // namespace

@@ -1,0 +1,154 @@
+// Crash and restart (issue 18): the BEV builder killed with SIGKILL in the middle of a road of a
+// replayed drive, restarted by lanemap-launch (restart: on-failure), carries the road on from its
+// checkpoint (<store>/bev/open/, core/bev/bev_store.h): no closed road is missing and every lane
+// of an uninterrupted run's map is found again (recall 1 against it, centre lines within 5 cm RMS).
+// Precision is printed, not asserted: the frames sent while the builder was down (the time since
+// its last checkpoint, the restart delay and its start: 0.8-1.4 s here) are lost on the bus; on
+// this drive a 1.4 s gap once split one lane into two pieces (P 0.75), gaps up to 1.2 s did not. Several kill times; the whole graph runs in a private network namespace.
+#include "core/eval/evaluate.h"
+#include "core/io/lanelet2.h"
+#include "lanemap/pose_t.hpp"
+#include "lanemap/status_t.hpp"
+#include "tests/bev/bev_replay.h"
+#include "tests/common/child_process.h"
+#include "tests/common/lcm_log.h"
+#include "tests/common/netns.h"
+#include "tests/common/sim_drive.h"
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+#include <signal.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+namespace lt = lanemap::testing;
+
+constexpr const char* kGraphUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";  // config/launch/demo.yaml
+
+std::set<std::string> files(const fs::path& dir, const std::string& ext) {
+  std::set<std::string> out;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    if (e.path().extension() == ext) out.insert(e.path().filename().string());
+  }
+  return out;
+}
+
+// Watches the graph's bus: the drive's time (POSE) and the BEV builder's pid and counters (STATUS).
+struct Watch {
+  int64_t first_pose = 0, last_pose = 0;
+  int bev_pid = 0;
+  std::map<std::string, int64_t> bev_counters;
+  std::set<int> bev_pids;
+  void onPose(const lcm::ReceiveBuffer*, const std::string&, const lanemap::pose_t* m) {
+    if (!first_pose) first_pose = m->utime;
+    last_pose = m->utime;
+  }
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&, const lanemap::status_t* s) {
+    if (s->process != "bev_builder") return;
+    bev_pid = s->pid;
+    bev_pids.insert(s->pid);
+    for (size_t i = 0; i < s->counter_names.size() && i < s->counter_values.size(); ++i) bev_counters[s->counter_names[i]] = s->counter_values[i];
+  }
+};
+
+struct GraphRun {
+  std::string store;
+  bool killed = false;
+  Watch watch;
+};
+
+// The demo graph over the drive (truth labels straight into the BEV builder); with kill_at_s > 0,
+// the BEV builder gets SIGKILL when the drive's time reaches that many seconds.
+GraphRun runGraph(const std::string& drive, const std::string& dir, double kill_at_s) {
+  GraphRun run;
+  run.store = dir + "/store";
+  lt::ChildProcess graph({lt::binPath("lanemap-launch"), std::string(LANEMAP_SOURCE_DIR) + "/config/launch/demo.yaml",
+                          "--all-hosts", "--status-interval", "0", "--set", "drive=" + drive, "--set", "store=" + run.store,
+                          "--set", "labels=SEMANTIC_FRONT_TRUTH", "--set", "viewer_port=18791", "--log-dir", dir + "/logs"});
+  EXPECT_TRUE(graph.started());
+  lcm::LCM lcm(kGraphUrl);
+  EXPECT_TRUE(lcm.good());
+  lcm.subscribe("POSE", &Watch::onPose, &run.watch);
+  lcm.subscribe("STATUS", &Watch::onStatus, &run.watch);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(180);
+  while (std::chrono::steady_clock::now() < deadline) {
+    lcm.handleTimeout(50);
+    if (kill_at_s > 0 && !run.killed && run.watch.first_pose && run.watch.bev_pid > 0 &&
+        run.watch.last_pose - run.watch.first_pose >= static_cast<int64_t>(kill_at_s * 1e6)) {
+      std::printf("SIGKILL to bev_builder (pid %d) at %.2f s of the drive\n", run.watch.bev_pid,
+                  (run.watch.last_pose - run.watch.first_pose) * 1e-6);
+      EXPECT_EQ(::kill(run.watch.bev_pid, SIGKILL), 0);
+      run.killed = true;
+    }
+    if (graph.waitExit(std::chrono::milliseconds(5)) != -2) break;
+  }
+  EXPECT_EQ(graph.waitExit(std::chrono::seconds(30)), 0) << "the launch did not end well: see " << dir << "/logs";
+  return run;
+}
+
+TEST(CrashRestart, BevBuilderKilledMidRoadLosesNoRoadAndNoLane) {
+  if (!lt::inPrivateNetns()) {
+    ASSERT_EQ(lt::rerunInPrivateNetns(), 0);
+    return;
+  }
+  const std::string drive = lt::sharedSimDrive("osm/west-oakland.osm", lt::kBevDriveSeconds, lt::kBevDriveSeed, lt::kBevDriveArgs);
+  ASSERT_FALSE(drive.empty());
+  // The drive's first road is driven from its start to ~13 s; the kills fall inside it, early
+  // enough for the builder to be back before it closes.
+  std::ifstream sj(drive + "/scenario.json");
+  const auto scenario = nlohmann::json::parse(sj);
+  ASSERT_GE(scenario["route"].size(), 2u);
+  const double first_road_s = (scenario["route"][0]["left_utime"].get<int64_t>() - scenario["route"][0]["entered_utime"].get<int64_t>()) * 1e-6;
+  ASSERT_GT(first_road_s, 9.0) << "the drive's first road is too short to kill the builder inside it";
+
+  lt::TempDir out("crash-restart");
+  const GraphRun reference = runGraph(drive, out.str("reference"), 0.0);
+  const auto road_files = files(fs::path(reference.store) / "lanes", ".osm");
+  ASSERT_GE(road_files.size(), 1u) << "the uninterrupted run mapped no road";
+  EXPECT_EQ(reference.watch.bev_pids.size(), 1u);
+  const auto origin = lanemap::eval::lanelet2Origin(drive + "/groundtruth.osm");
+  const auto ref_map = lanemap::io::readLanelet2(reference.store + "/lane_map.osm", origin.lat, origin.lon);
+
+  for (const double kill_at : {4.0, 6.5}) {
+    SCOPED_TRACE("killed at " + std::to_string(kill_at) + " s");
+    const GraphRun run = runGraph(drive, out.str("killed-" + std::to_string(static_cast<int>(kill_at * 10))), kill_at);
+    ASSERT_TRUE(run.killed);
+    // Restarted by the launcher, it recovered the open road from its checkpoint and says so.
+    EXPECT_EQ(run.watch.bev_pids.size(), 2u);
+    const auto counter = [&](const char* name, int64_t none) {
+      const auto it = run.watch.bev_counters.find(name);
+      return it == run.watch.bev_counters.end() ? none : it->second;
+    };
+    EXPECT_EQ(counter("roads_recovered", 0), 1);
+    EXPECT_GT(counter("frames_recovered", 0), 0);
+    const int64_t gap_ms = counter("recovered_gap_ms", -1);
+    std::printf("frames recovered %lld, gap between the checkpoint and the first frame after the restart %lld ms\n",
+                static_cast<long long>(counter("frames_recovered", 0)), static_cast<long long>(gap_ms));
+    EXPECT_GT(gap_ms, 0);
+    // No closed road is missing, and the lanes are the uninterrupted run's.
+    EXPECT_EQ(files(fs::path(run.store) / "lanes", ".osm"), road_files);
+    EXPECT_TRUE(files(fs::path(run.store) / "bev" / "open", ".bev").size() <= 1u) << "checkpoints of closed roads are removed";
+    const auto map = lanemap::io::readLanelet2(run.store + "/lane_map.osm", origin.lat, origin.lon);
+    const auto same = lanemap::eval::evaluate(ref_map, map);
+    std::printf("killed at %.1f s vs uninterrupted: lanes P %.3f R %.3f RMS %.3f m (%zu lanes)\n", kill_at,
+                same.lane_precision.value(), same.lane_recall.value(), same.lane_rms_m, same.built_lanes.size());
+    EXPECT_DOUBLE_EQ(same.lane_recall.value(), 1.0);
+    EXPECT_LT(same.lane_rms_m, 0.05);
+    for (const auto& m : same.matches) std::printf("  lane pair: IoU %.3f RMS %.3f m coverage %.3f\n", m.iou, m.rms_m, m.coverage);
+    std::printf("  BEV builder: %lld checkpoints, %lld us at most, %lld kB\n", static_cast<long long>(counter("checkpoints_written", 0)),
+                static_cast<long long>(counter("checkpoint_us_max", 0)), static_cast<long long>(counter("checkpoint_kb", 0)));
+  }
+}
+
+}  // namespace

@@ -70,6 +70,9 @@ class RoadTrackerApp {
     }
     process_.lcm().publish(lanemap::channels::kRoadEvent, &msg);
     process_.counters().add(std::string("events_") + lanemap::tracking::toString(e.type));
+    // Found on a road rather than entering it from a junction: at the start, after a lost pose, or
+    // after this process restarted mid-drive (what it recovered: where the car is).
+    if (e.type == lanemap::tracking::RoadEventType::kEnteredRoad && e.previous_road_id < 0) process_.counters().add("roads_found_mid_road");
   }
 
   lanemap::Process& process_;

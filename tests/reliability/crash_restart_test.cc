@@ -44,8 +44,9 @@ std::set<std::string> files(const fs::path& dir, const std::string& ext) {
   return out;
 }
 
-// Watches the graph's bus: the drive's time (POSE) and the BEV builder's pid and counters (STATUS).
+// Watches the graph's bus: the drive's time (POSE) and one process's pid and counters (STATUS).
 struct Watch {
+  std::string process = "bev_builder";
   int64_t first_pose = 0, last_pose = 0;
   int bev_pid = 0;
   std::map<std::string, int64_t> bev_counters;
@@ -55,7 +56,7 @@ struct Watch {
     last_pose = m->utime;
   }
   void onStatus(const lcm::ReceiveBuffer*, const std::string&, const lanemap::status_t* s) {
-    if (s->process != "bev_builder") return;
+    if (s->process != process) return;
     bev_pid = s->pid;
     bev_pids.insert(s->pid);
     for (size_t i = 0; i < s->counter_names.size() && i < s->counter_values.size(); ++i) bev_counters[s->counter_names[i]] = s->counter_values[i];
@@ -69,9 +70,10 @@ struct GraphRun {
 };
 
 // The demo graph over the drive (truth labels straight into the BEV builder); with kill_at_s > 0,
-// the BEV builder gets SIGKILL when the drive's time reaches that many seconds.
-GraphRun runGraph(const std::string& drive, const std::string& dir, double kill_at_s) {
+// `process` gets SIGKILL when the drive's time reaches that many seconds.
+GraphRun runGraph(const std::string& drive, const std::string& dir, double kill_at_s, const std::string& process = "bev_builder") {
   GraphRun run;
+  run.watch.process = process;
   run.store = dir + "/store";
   lt::ChildProcess graph({lt::binPath("lanemap-launch"), std::string(LANEMAP_SOURCE_DIR) + "/config/launch/demo.yaml",
                           "--all-hosts", "--status-interval", "0", "--set", "drive=" + drive, "--set", "store=" + run.store,
@@ -86,7 +88,7 @@ GraphRun runGraph(const std::string& drive, const std::string& dir, double kill_
     lcm.handleTimeout(50);
     if (kill_at_s > 0 && !run.killed && run.watch.first_pose && run.watch.bev_pid > 0 &&
         run.watch.last_pose - run.watch.first_pose >= static_cast<int64_t>(kill_at_s * 1e6)) {
-      std::printf("SIGKILL to bev_builder (pid %d) at %.2f s of the drive\n", run.watch.bev_pid,
+      std::printf("SIGKILL to %s (pid %d) at %.2f s of the drive\n", process.c_str(), run.watch.bev_pid,
                   (run.watch.last_pose - run.watch.first_pose) * 1e-6);
       EXPECT_EQ(::kill(run.watch.bev_pid, SIGKILL), 0);
       run.killed = true;
@@ -149,6 +151,35 @@ TEST(CrashRestart, BevBuilderKilledMidRoadLosesNoRoadAndNoLane) {
     std::printf("  BEV builder: %lld checkpoints, %lld us at most, %lld kB\n", static_cast<long long>(counter("checkpoints_written", 0)),
                 static_cast<long long>(counter("checkpoint_us_max", 0)), static_cast<long long>(counter("checkpoint_kb", 0)));
   }
+}
+
+TEST(CrashRestart, RoadTrackerKilledMidRoadFindsTheCarAgainAndNoRoadIsLost) {
+  if (!lt::inPrivateNetns()) {
+    ASSERT_EQ(lt::rerunInPrivateNetns(), 0);
+    return;
+  }
+  const std::string drive = lt::sharedSimDrive("osm/west-oakland.osm", lt::kBevDriveSeconds, lt::kBevDriveSeed, lt::kBevDriveArgs);
+  ASSERT_FALSE(drive.empty());
+  lt::TempDir out("crash-restart-tracker");
+  const GraphRun reference = runGraph(drive, out.str("reference"), 0.0, "road_tracker");
+  const auto road_files = files(fs::path(reference.store) / "lanes", ".osm");
+  ASSERT_GE(road_files.size(), 1u);
+  const auto origin = lanemap::eval::lanelet2Origin(drive + "/groundtruth.osm");
+  const auto ref_map = lanemap::io::readLanelet2(reference.store + "/lane_map.osm", origin.lat, origin.lon);
+  const GraphRun run = runGraph(drive, out.str("killed"), 5.0, "road_tracker");
+  ASSERT_TRUE(run.killed);
+  EXPECT_EQ(run.watch.bev_pids.size(), 2u) << "restarted by the launcher";
+  // The new tracker found the car on its road again: the road went on and closed as before.
+  ASSERT_TRUE(run.watch.bev_counters.count("roads_found_mid_road"));
+  EXPECT_EQ(run.watch.bev_counters.at("roads_found_mid_road"), 1);
+  EXPECT_EQ(files(fs::path(run.store) / "lanes", ".osm"), road_files);
+  const auto map = lanemap::io::readLanelet2(run.store + "/lane_map.osm", origin.lat, origin.lon);
+  const auto same = lanemap::eval::evaluate(ref_map, map);
+  std::printf("road tracker killed at 5 s vs uninterrupted: lanes P %.3f R %.3f RMS %.3f m\n", same.lane_precision.value(),
+              same.lane_recall.value(), same.lane_rms_m);
+  EXPECT_DOUBLE_EQ(same.lane_precision.value(), 1.0);
+  EXPECT_DOUBLE_EQ(same.lane_recall.value(), 1.0);
+  EXPECT_LT(same.lane_rms_m, 0.05);
 }
 
 }  // namespace

@@ -1,0 +1,1034 @@
+// The simulator's world from a Lanelet2 map (see lanelet2_world.h for the rules).
+#include "core/sim/lanelet2_world.h"
+
+#include "core/io/lanelet2.h"
+#include "core/sim/world_geometry.h"
+#include "core/sim/world_scene.h"
+
+#include <osmium/handler.hpp>
+#include <osmium/io/reader.hpp>
+#include <osmium/io/xml_input.hpp>
+#include <osmium/osm/node.hpp>
+#include <osmium/osm/relation.hpp>
+#include <osmium/visitor.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <numeric>
+#include <set>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace lanemap::sim {
+namespace {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+using map::LaneletKind;
+using map::LineType;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kCurbWidth = 0.15;       // curb band (as the OSM world builder paints it)
+constexpr double kSidewalkWidth = 2.0;    // sidewalk band behind a curb
+constexpr double kStopLineWidth = 0.4;
+constexpr double kSuccessorGap = 0.2;     // bound ends this close: one lanelet follows the other
+constexpr double kCastStep = 0.2;         // lateral casts (lane counts, road middle)
+constexpr double kCastGap = 0.6;          // a cast stops after this much off the lanes
+constexpr double kCastMax = 25.0;
+
+// ---------- polylines ----------
+double length(const std::vector<Vector2d>& p) { return geom::polylineLength(p); }
+
+std::vector<Vector2d> xy(const std::vector<Vector3d>& pts) {
+  std::vector<Vector2d> out;
+  out.reserve(pts.size());
+  for (const auto& p : pts) {
+    if (out.empty() || (p.head<2>() - out.back()).norm() > 1e-6) out.push_back(p.head<2>());
+  }
+  return out;
+}
+
+// n points evenly spaced by arc length (n >= 2).
+std::vector<Vector2d> resample(const std::vector<Vector2d>& p, size_t n) {
+  std::vector<Vector2d> out;
+  if (p.empty()) return out;
+  if (p.size() == 1) return std::vector<Vector2d>(n, p.front());
+  std::vector<double> cum(p.size(), 0.0);
+  for (size_t i = 1; i < p.size(); ++i) cum[i] = cum[i - 1] + (p[i] - p[i - 1]).norm();
+  const double L = cum.back();
+  size_t j = 1;
+  for (size_t k = 0; k < n; ++k) {
+    const double s = L * static_cast<double>(k) / static_cast<double>(n - 1);
+    while (j + 1 < p.size() && cum[j] < s) ++j;
+    const double seg = cum[j] - cum[j - 1];
+    const double u = seg > 0 ? std::clamp((s - cum[j - 1]) / seg, 0.0, 1.0) : 0.0;
+    out.push_back(p[j - 1] + u * (p[j] - p[j - 1]));
+  }
+  return out;
+}
+
+std::vector<Vector2d> resampleSpacing(const std::vector<Vector2d>& p, double spacing) {
+  const double L = length(p);
+  const size_t n = std::max<size_t>(2, static_cast<size_t>(std::ceil(L / spacing)) + 1);
+  return resample(p, n);
+}
+
+struct Projection {
+  double distance = std::numeric_limits<double>::infinity();
+  double s = 0.0;
+  Vector2d point = Vector2d::Zero();
+  Vector2d tangent = Vector2d::UnitX();
+};
+
+Projection project(const std::vector<Vector2d>& p, const Vector2d& q) {
+  Projection best;
+  double acc = 0.0;
+  for (size_t i = 1; i < p.size(); ++i) {
+    const Vector2d ab = p[i] - p[i - 1];
+    const double l2 = ab.squaredNorm();
+    const double len = std::sqrt(l2);
+    const double u = l2 > 0 ? std::clamp((q - p[i - 1]).dot(ab) / l2, 0.0, 1.0) : 0.0;
+    const Vector2d c = p[i - 1] + u * ab;
+    const double d = (c - q).norm();
+    if (d < best.distance) {
+      best.distance = d;
+      best.s = acc + u * len;
+      best.point = c;
+      if (len > 0) best.tangent = ab / len;
+    }
+    acc += len;
+  }
+  return best;
+}
+
+Vector2d direction(const std::vector<Vector2d>& p) {
+  if (p.size() < 2) return Vector2d::UnitX();
+  const Vector2d d = p.back() - p.front();
+  return d.norm() > 1e-9 ? Vector2d(d.normalized()) : Vector2d::UnitX();
+}
+
+double headingChange(const std::vector<Vector2d>& c) {
+  if (c.size() < 2) return 0.0;
+  const double L = length(c);
+  const auto r = resample(c, std::max<size_t>(3, static_cast<size_t>(L / 0.5) + 1));
+  const Vector2d a = r[1] - r[0], b = r[r.size() - 1] - r[r.size() - 2];
+  return std::atan2(geom::cross(a, b), a.dot(b));
+}
+
+// Douglas-Peucker on 2-D points.
+void simplifyInto(const std::vector<Vector2d>& p, size_t i0, size_t i1, double tol, std::vector<char>& keep) {
+  if (i1 <= i0 + 1) return;
+  double worst = -1.0;
+  size_t at = i0;
+  for (size_t i = i0 + 1; i < i1; ++i) {
+    const double d = geom::pointSegmentDistance(p[i], p[i0], p[i1]);
+    if (d > worst) {
+      worst = d;
+      at = i;
+    }
+  }
+  if (worst > tol) {
+    keep[at] = 1;
+    simplifyInto(p, i0, at, tol, keep);
+    simplifyInto(p, at, i1, tol, keep);
+  }
+}
+std::vector<Vector2d> simplify(const std::vector<Vector2d>& p, double tol) {
+  if (p.size() < 3) return p;
+  std::vector<char> keep(p.size(), 0);
+  keep.front() = keep.back() = 1;
+  simplifyInto(p, 0, p.size() - 1, tol, keep);
+  std::vector<Vector2d> out;
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (keep[i]) out.push_back(p[i]);
+  }
+  return out;
+}
+
+struct UnionFind {
+  std::vector<size_t> parent;
+  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), size_t{0}); }
+  size_t find(size_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void join(size_t a, size_t b) { parent[find(a)] = find(b); }
+};
+
+// ---------- what the file says beyond io::Lanelet2File ----------
+struct Extra {
+  std::map<int64_t, std::string> one_way;  // lanelet relation id -> one_way tag
+  double min_lat = 1e9, max_lat = -1e9, min_lon = 1e9, max_lon = -1e9;
+  size_t nodes = 0;
+};
+
+Extra readExtra(const std::string& path) {
+  struct Handler : osmium::handler::Handler {
+    Extra* e;
+    void node(const osmium::Node& n) {
+      if (!n.location().valid()) return;
+      e->min_lat = std::min(e->min_lat, n.location().lat());
+      e->max_lat = std::max(e->max_lat, n.location().lat());
+      e->min_lon = std::min(e->min_lon, n.location().lon());
+      e->max_lon = std::max(e->max_lon, n.location().lon());
+      ++e->nodes;
+    }
+    void relation(const osmium::Relation& r) {
+      const char* type = r.tags()["type"];
+      const char* ow = r.tags()["one_way"];
+      if (type && std::string(type) == "lanelet" && ow) e->one_way[r.id()] = ow;
+    }
+  } handler;
+  Extra extra;
+  handler.e = &extra;
+  try {
+    osmium::io::Reader reader{osmium::io::File{path, "osm"}};
+    osmium::apply(reader, handler);
+    reader.close();
+  } catch (const std::exception& ex) {
+    throw io::Lanelet2Error(path + ": " + ex.what());
+  }
+  return extra;
+}
+
+bool isVehicleSubtype(const std::string& s) {
+  return s == "road" || s == "highway" || s == "bus_lane" || s == "play_street";
+}
+
+bool isTwoWay(const std::string& subtype, const std::string& one_way) {
+  if (one_way == "no" || one_way == "false") return true;
+  if (one_way.empty()) return subtype == "play_street";  // Lanelet2's defaults: road/highway one way
+  return false;
+}
+
+// ---------- the lanelets being built ----------
+struct VL {
+  map::Lanelet ll;
+  std::vector<Vector2d> left, right, centre;  // in the driving direction
+  std::vector<Vector2d> poly;
+  Eigen::AlignedBox2d box;
+  int64_t left_key = 0, right_key = 0;        // original way of each bound
+  std::vector<size_t> succ, pred;
+  std::set<size_t> lateral;                   // side-by-side vehicle lanelets
+  bool junction = false;
+  int comp = -1, area = -1;
+  int left_same = 0, right_same = 0;          // same-direction lanes to the left / right
+};
+
+void finishGeometry(VL& v) {
+  v.poly = v.left;
+  v.poly.insert(v.poly.end(), v.right.rbegin(), v.right.rend());
+  v.box = Eigen::AlignedBox2d();
+  for (const auto& p : v.poly) v.box.extend(p);
+}
+
+bool inside(const VL& v, const Vector2d& p) {
+  return v.box.contains(p) && geom::pointInPolygon(p, v.poly);
+}
+
+// Lanelets whose box is within `margin` of `box`.
+std::vector<size_t> near(const std::vector<VL>& vls, const Eigen::AlignedBox2d& box, double margin) {
+  Eigen::AlignedBox2d b = box;
+  b.min() -= Vector2d(margin, margin);
+  b.max() += Vector2d(margin, margin);
+  std::vector<size_t> out;
+  for (size_t i = 0; i < vls.size(); ++i) {
+    if (vls[i].box.intersects(b)) out.push_back(i);
+  }
+  return out;
+}
+
+// A cast from p along unit vector n over the lanelets `cands`: the lanelets met in order (each
+// once) until the cast has been off them for kCastGap; `extent` = the last distance on a lanelet.
+std::vector<size_t> cast(const std::vector<VL>& vls, const std::vector<size_t>& cands, const Vector2d& p,
+                         const Vector2d& n, double* extent) {
+  std::vector<size_t> met;
+  double last_on = 0.0;
+  for (double d = 0.0; d <= kCastMax; d += kCastStep) {
+    const Vector2d q = p + d * n;
+    bool on = false;
+    for (size_t c : cands) {
+      if (!inside(vls[c], q)) continue;
+      on = true;
+      if (std::find(met.begin(), met.end(), c) == met.end()) met.push_back(c);
+    }
+    if (on) last_on = d;
+    if (d - last_on > kCastGap) break;
+  }
+  if (extent) *extent = last_on;
+  return met;
+}
+
+class Builder {
+ public:
+  Builder(const std::string& path, const geo::LatLonAlt& origin, const WorldOptions& options)
+      : path_(path), origin_(origin), frame_(origin), impl_(std::make_unique<SimWorld::Impl>()) {
+    impl_->options = options;
+    impl_->options.flat = true;
+    impl_->options.validate();
+    impl_->right_hand = options.right_hand_traffic;
+  }
+
+  Lanelet2World build() {
+    io::Lanelet2ReadOptions ro;
+    ro.origin_alt = origin_.alt;
+    file_ = io::readLanelet2File(path_, origin_.lat, origin_.lon, ro);
+    extra_ = readExtra(path_);
+    stats_.map_lanelets = file_.map.lanelets.size();
+    for (const auto& l : file_.map.lines) next_id_ = std::max(next_id_, l.id + 1);
+    for (const auto& l : file_.map.lanelets) next_id_ = std::max(next_id_, l.id + 1);
+    for (const auto& [copy, way] : file_.reversed_copy_of) next_id_ = std::max(next_id_, copy + 1);
+
+    makeVehicleLanelets();
+    if (vls_.empty()) throw std::runtime_error(path_ + ": no vehicle lanelet (subtype road, highway, bus_lane, play_street)");
+    findSuccessors();
+    findLateral();
+    findJunctions();
+    groupAreas();
+    groupRoads();
+    deriveOsm();
+    labelTruth();
+    buildScene();
+
+    Lanelet2World out;
+    impl_->stats.road_lanelets = stats_.road_lanelets;
+    impl_->stats.intersection_lanelets = stats_.junction_lanelets;
+    impl_->stats.lines = impl_->truth.lines.size();
+    impl_->stats.crosswalks = stats_.crosswalks;
+    impl_->stats.stop_lines = stats_.stop_lines;
+    impl_->finalize();
+    out.world = std::make_unique<SimWorld>(std::move(impl_));
+    out.roads = std::move(roads_);
+    out.skeleton = std::move(skeleton_);
+    out.stats = stats_;
+    out.split_twin = split_twin_;
+    return out;
+  }
+
+ private:
+  int64_t key(int64_t line_id) const {
+    auto it = file_.reversed_copy_of.find(line_id);
+    if (it != file_.reversed_copy_of.end()) return it->second;
+    auto k = extra_keys_.find(line_id);
+    return k != extra_keys_.end() ? k->second : line_id;
+  }
+
+  const map::LineString& fileLine(int64_t id) const {
+    const auto* l = file_.map.line(id);
+    if (!l) throw std::runtime_error(path_ + ": line " + std::to_string(id) + " missing");
+    return *l;
+  }
+
+  const map::LineString* anyLine(int64_t id) const {
+    if (const auto* l = file_.map.line(id)) return l;
+    for (const auto& l : new_lines_) {
+      if (l.id == id) return &l;
+    }
+    return nullptr;
+  }
+
+  int64_t addLine(LineType type, const std::vector<Vector2d>& pts, int64_t k) {
+    map::LineString ls;
+    ls.id = next_id_++;
+    ls.type = type;
+    for (const auto& p : pts) ls.points.emplace_back(p.x(), p.y(), 0.0);
+    extra_keys_[ls.id] = k;
+    new_lines_.push_back(ls);
+    return ls.id;
+  }
+
+  // 1. Vehicle lanelets, bounds in the driving direction; two-way lanelets split in two.
+  void makeVehicleLanelets() {
+    for (const auto& l : file_.map.lanelets) {
+      const auto st = file_.lanelet_subtype.find(l.id);
+      const std::string subtype = st == file_.lanelet_subtype.end() ? "" : st->second;
+      if (!isVehicleSubtype(subtype)) continue;
+      ++stats_.map_vehicle_lanelets;
+      VL v;
+      v.ll = l;
+      v.ll.kind = LaneletKind::kRoad;
+      v.ll.successors.clear();
+      v.ll.road_id = v.ll.from_node = v.ll.to_node = v.ll.intersection_id = -1;
+      v.ll.index_from_left = -1;
+      v.ll.turn = map::TurnDirection::kNone;
+      v.left = xy(fileLine(l.left_id).points);
+      v.right = xy(fileLine(l.right_id).points);
+      v.centre = xy(l.centre);
+      if (v.left.size() < 2 || v.right.size() < 2 || v.centre.size() < 2) continue;
+      const Vector2d dir = direction(v.centre);
+      bool left_rev = false, right_rev = false;
+      if (direction(v.left).dot(dir) < 0) {
+        std::reverse(v.left.begin(), v.left.end());
+        left_rev = true;
+      }
+      if (direction(v.right).dot(dir) < 0) {
+        std::reverse(v.right.begin(), v.right.end());
+        right_rev = true;
+      }
+      v.left_key = key(l.left_id);
+      v.right_key = key(l.right_id);
+      if (left_rev) v.ll.left_id = addLine(fileLine(l.left_id).type, v.left, v.left_key);
+      if (right_rev) v.ll.right_id = addLine(fileLine(l.right_id).type, v.right, v.right_key);
+      const auto ow = extra_.one_way.find(l.id);
+      if (!isTwoWay(subtype, ow == extra_.one_way.end() ? "" : ow->second)) {
+        finishGeometry(v);
+        vls_.push_back(std::move(v));
+        continue;
+      }
+      // Two ways: the drawn direction drives on the right half (left-hand traffic: the left half).
+      ++stats_.two_way_split;
+      const size_t n = std::max({v.left.size(), v.right.size(),
+                                 static_cast<size_t>(std::ceil(std::max(length(v.left), length(v.right)))) + 1});
+      const auto L = resample(v.left, n), R = resample(v.right, n);
+      std::vector<Vector2d> M(n), cf(n), cb(n);
+      for (size_t i = 0; i < n; ++i) M[i] = 0.5 * (L[i] + R[i]);
+      const int64_t mid_key = next_id_;  // the new middle line's own id
+      const int64_t mid_id = addLine(LineType::kVirtual, M, mid_key);
+      std::vector<Vector2d> Mr(M.rbegin(), M.rend());
+      const int64_t mid_rev_id = addLine(LineType::kVirtual, Mr, mid_key);
+      const bool rh = impl_->right_hand;
+      // Forward half: between M and R (right-hand) or between L and M (left-hand).
+      VL f = v, b = v;
+      const std::vector<Vector2d>& f_left = rh ? M : L;
+      const std::vector<Vector2d>& f_right = rh ? R : M;
+      f.left = f_left;
+      f.right = f_right;
+      f.left_key = rh ? mid_key : v.left_key;
+      f.right_key = rh ? v.right_key : mid_key;
+      if (rh) f.ll.left_id = mid_id;
+      else f.ll.right_id = mid_id;
+      for (size_t i = 0; i < n; ++i) cf[i] = 0.5 * (f_left[i] + f_right[i]);
+      f.centre = cf;
+      // Backward half: the other half, driven the other way; its bounds are reversed copies.
+      std::vector<Vector2d> b_left_fwd = rh ? L : M, b_right_fwd = rh ? M : R;  // in the drawn direction
+      // Driving backwards, the drawn right side is on the left.
+      b.left.assign(b_right_fwd.rbegin(), b_right_fwd.rend());
+      b.right.assign(b_left_fwd.rbegin(), b_left_fwd.rend());
+      b.left_key = rh ? mid_key : v.right_key;
+      b.right_key = rh ? v.left_key : mid_key;
+      b.ll.left_id = rh ? mid_rev_id : addLine(fileLine(l.right_id).type, b.left, v.right_key);
+      b.ll.right_id = rh ? addLine(fileLine(l.left_id).type, b.right, v.left_key) : mid_rev_id;
+      for (size_t i = 0; i < n; ++i) cb[i] = 0.5 * (b.left[i] + b.right[i]);
+      b.centre = cb;
+      b.ll.id = next_id_++;
+      b.ll.stop_line_id.reset();
+      split_twin_[f.ll.id] = b.ll.id;
+      finishGeometry(f);
+      finishGeometry(b);
+      vls_.push_back(std::move(f));
+      vls_.push_back(std::move(b));
+    }
+    for (auto& v : vls_) {
+      v.ll.centre.clear();
+      for (const auto& p : v.centre) v.ll.centre.emplace_back(p.x(), p.y(), 0.0);
+    }
+  }
+
+  // 2. B follows A when A's bounds end where B's begin.
+  void findSuccessors() {
+    for (size_t a = 0; a < vls_.size(); ++a) {
+      for (size_t b = 0; b < vls_.size(); ++b) {
+        if (a == b) continue;
+        const VL &A = vls_[a], &B = vls_[b];
+        if ((A.left.back() - B.left.front()).norm() < kSuccessorGap &&
+            (A.right.back() - B.right.front()).norm() < kSuccessorGap) {
+          vls_[a].succ.push_back(b);
+          vls_[b].pred.push_back(a);
+        }
+      }
+    }
+  }
+
+  // 3. Side by side: a shared bound, or most of one's bound runs along one of the other's bounds.
+  void findLateral() {
+    auto along = [](const std::vector<Vector2d>& a, const std::vector<Vector2d>& b) {
+      const auto s = resampleSpacing(a, 1.0);
+      size_t hits = 0;
+      for (const auto& p : s) hits += project(b, p).distance < 0.15;
+      return static_cast<double>(hits) / static_cast<double>(s.size());
+    };
+    for (size_t a = 0; a < vls_.size(); ++a) {
+      for (size_t b : near(vls_, vls_[a].box, 0.5)) {
+        if (b <= a) continue;
+        const VL &A = vls_[a], &B = vls_[b];
+        bool side = false;
+        for (int64_t ka : {A.left_key, A.right_key}) {
+          if (ka == B.left_key || ka == B.right_key) side = true;
+        }
+        for (int sa = 0; sa < 2 && !side; ++sa) {
+          for (int sb = 0; sb < 2 && !side; ++sb) {
+            const auto& la = sa ? A.right : A.left;
+            const auto& lb = sb ? B.right : B.left;
+            if (std::max(along(la, lb), along(lb, la)) >= 0.5) side = true;
+          }
+        }
+        if (side) {
+          vls_[a].lateral.insert(b);
+          vls_[b].lateral.insert(a);
+        }
+      }
+    }
+  }
+
+  // 4. Junction lanelets: the centre line runs inside another vehicle lanelet that is neither
+  //    side by side nor a successor/predecessor (crossing, branching, merging movements).
+  void findJunctions() {
+    conflicts_.assign(vls_.size(), {});
+    for (size_t a = 0; a < vls_.size(); ++a) {
+      const VL& A = vls_[a];
+      const double L = length(A.centre);
+      if (L < 1.6) continue;
+      const auto pts = resampleSpacing(A.centre, 0.5);
+      std::vector<size_t> cands;
+      for (size_t b : near(vls_, A.box, 0.0)) {
+        if (b == a || A.lateral.count(b)) continue;
+        if (std::find(A.succ.begin(), A.succ.end(), b) != A.succ.end()) continue;
+        if (std::find(A.pred.begin(), A.pred.end(), b) != A.pred.end()) continue;
+        cands.push_back(b);
+      }
+      for (size_t b : cands) {
+        int hits = 0;
+        double s = 0.0;
+        for (size_t i = 0; i < pts.size(); ++i) {
+          if (i > 0) s += (pts[i] - pts[i - 1]).norm();
+          if (s < 0.75 || s > L - 0.75) continue;
+          if (inside(vls_[b], pts[i])) ++hits;
+        }
+        if (hits >= 2) {
+          conflicts_[a].insert(b);
+          conflicts_[b].insert(a);
+        }
+      }
+    }
+    for (size_t a = 0; a < vls_.size(); ++a) {
+      if (!conflicts_[a].empty()) vls_[a].junction = true;
+    }
+  }
+
+  // 5. Junction areas and their OSM nodes.
+  void groupAreas() {
+    UnionFind uf(vls_.size());
+    for (size_t a = 0; a < vls_.size(); ++a) {
+      if (!vls_[a].junction) continue;
+      auto link = [&](size_t b) {
+        if (vls_[b].junction) uf.join(a, b);
+      };
+      for (size_t b : conflicts_[a]) link(b);
+      for (size_t b : vls_[a].succ) link(b);
+      for (size_t b : vls_[a].pred) link(b);
+      for (size_t b : vls_[a].lateral) link(b);
+    }
+    std::map<size_t, int> area_of_root;
+    for (size_t a = 0; a < vls_.size(); ++a) {
+      if (!vls_[a].junction) continue;
+      const size_t r = uf.find(a);
+      auto [it, inserted] = area_of_root.emplace(r, static_cast<int>(areas_.size()));
+      if (inserted) areas_.push_back({});
+      vls_[a].area = it->second;
+      areas_[it->second].lanelets.push_back(a);
+    }
+    for (auto& area : areas_) {
+      Vector2d sum = Vector2d::Zero();
+      size_t n = 0;
+      for (size_t a : area.lanelets) {
+        for (const auto& p : resampleSpacing(vls_[a].centre, 1.0)) {
+          sum += p;
+          ++n;
+        }
+      }
+      area.centre = sum / static_cast<double>(std::max<size_t>(1, n));
+      area.node = next_osm_node_++;
+      addOsmNode(area.node, area.centre);
+    }
+    stats_.junction_areas = areas_.size();
+  }
+
+  // 6. Roads: road lanelets joined by succession or side by side.
+  void groupRoads() {
+    UnionFind uf(vls_.size());
+    for (size_t a = 0; a < vls_.size(); ++a) {
+      if (vls_[a].junction) continue;
+      for (size_t b : vls_[a].succ) {
+        if (!vls_[b].junction) uf.join(a, b);
+      }
+      for (size_t b : vls_[a].lateral) {
+        if (!vls_[b].junction) uf.join(a, b);
+      }
+    }
+    std::map<size_t, int> comp_of_root;
+    for (size_t a = 0; a < vls_.size(); ++a) {
+      if (vls_[a].junction) continue;
+      auto [it, inserted] = comp_of_root.emplace(uf.find(a), static_cast<int>(comps_.size()));
+      if (inserted) comps_.push_back({});
+      vls_[a].comp = it->second;
+      comps_[it->second].lanelets.push_back(a);
+    }
+    // Same-direction lanes to each road lanelet's left and right, at its middle.
+    for (auto& v : vls_) {
+      if (v.junction) continue;
+      std::vector<size_t> cands;
+      for (size_t i : comps_[v.comp].lanelets) cands.push_back(i);
+      const auto pr = project(v.centre, resample(v.centre, 3)[1]);
+      const Vector2d p = pr.point, t = pr.tangent, n(-t.y(), t.x());
+      for (int side = 0; side < 2; ++side) {
+        const auto met = cast(vls_, cands, p, side == 0 ? n : Vector2d(-n), nullptr);
+        int same = 0;
+        for (size_t m : met) {
+          if (&vls_[m] == &v) continue;
+          const auto pm = project(vls_[m].centre, p);
+          if (pm.tangent.dot(t) <= 0.0) break;  // the other direction begins
+          ++same;
+        }
+        (side == 0 ? v.left_same : v.right_same) = same;
+      }
+    }
+  }
+
+  void addOsmNode(int64_t id, const Vector2d& p) {
+    const geo::LatLonAlt g = frame_.toWgs84(Vector3d(p.x(), p.y(), 0.0));
+    osm::Node n;
+    n.id = id;
+    // OSM's precision (what roads.osm stores), so a skeleton built from the file is this one.
+    n.lat = std::round(g.lat * 1e7) / 1e7;
+    n.lon = std::round(g.lon * 1e7) / 1e7;
+    roads_.nodes[id] = n;
+  }
+
+  // The longest chain of successors inside a road (its spine), in its driving direction.
+  std::vector<size_t> spine(const std::vector<size_t>& members) const {
+    std::set<size_t> in(members.begin(), members.end());
+    std::vector<size_t> best;
+    double best_len = -1.0;
+    for (size_t start : members) {
+      bool has_pred = false;
+      for (size_t p : vls_[start].pred) has_pred |= in.count(p) > 0;
+      if (has_pred) continue;
+      std::vector<size_t> chain{start};
+      std::set<size_t> seen{start};
+      double len = length(vls_[start].centre);
+      for (;;) {
+        const VL& cur = vls_[chain.back()];
+        size_t next = SIZE_MAX;
+        double best_turn = 1e9;
+        for (size_t s : cur.succ) {
+          if (!in.count(s) || seen.count(s)) continue;
+          const double turn = std::abs(headingChange({cur.centre[cur.centre.size() - 2], cur.centre.back(),
+                                                      vls_[s].centre[1]}));
+          if (turn < best_turn) {
+            best_turn = turn;
+            next = s;
+          }
+        }
+        if (next == SIZE_MAX) break;
+        chain.push_back(next);
+        seen.insert(next);
+        len += length(vls_[next].centre);
+      }
+      if (len > best_len) {
+        best_len = len;
+        best = chain;
+      }
+    }
+    if (best.empty()) best.push_back(members.front());  // a ring: any lanelet
+    return best;
+  }
+
+  // 7. The road-level OSM: one way per road, junction node to junction node; then the skeleton.
+  void deriveOsm() {
+    int64_t way_id = 1;
+    for (auto& comp : comps_) {
+      const auto chain = spine(comp.lanelets);
+      std::vector<Vector2d> centre;
+      for (size_t i : chain) {
+        for (const auto& p : vls_[i].centre) {
+          if (centre.empty() || (p - centre.back()).norm() > 1e-3) centre.push_back(p);
+        }
+      }
+      if (centre.size() < 2 || length(centre) < 0.5) continue;
+      // The middle of the whole cross-section at every 2 m of the spine.
+      const auto samples = resampleSpacing(centre, 2.0);
+      std::vector<size_t> cands = comp.lanelets;
+      std::vector<Vector2d> mid;
+      int fwd_max = 0, bwd_max = 0;
+      for (size_t k = 0; k < samples.size(); ++k) {
+        const Vector2d p = samples[k];
+        const Vector2d t = (samples[std::min(k + 1, samples.size() - 1)] - samples[k > 0 ? k - 1 : 0]).normalized();
+        const Vector2d n(-t.y(), t.x());
+        double dl = 0.0, dr = 0.0;
+        const auto ml = cast(vls_, cands, p, n, &dl);
+        const auto mr = cast(vls_, cands, p, -n, &dr);
+        mid.push_back(p + n * 0.5 * (dl - dr));
+        std::set<size_t> met(ml.begin(), ml.end());
+        met.insert(mr.begin(), mr.end());
+        int f = 0, b = 0;
+        for (size_t m : met) (project(vls_[m].centre, p).tangent.dot(t) > 0 ? f : b)++;
+        fwd_max = std::max({fwd_max, f, 1});
+        bwd_max = std::max(bwd_max, b);
+      }
+      for (size_t m : comp.lanelets) {
+        const Vector2d pm = resample(vls_[m].centre, 3)[1];
+        if (project(centre, pm).tangent.dot(project(vls_[m].centre, pm).tangent) < 0) bwd_max = std::max(bwd_max, 1);
+      }
+      // Junction areas at the two ends.
+      const double L = length(centre);
+      std::map<int, double> at_start, at_end;  // area -> distance of its attachment from the end
+      for (size_t m : comp.lanelets) {
+        auto attach = [&](size_t other, const Vector2d& where) {
+          const int a = vls_[other].area;
+          if (a < 0) return;
+          const auto pr = project(centre, where);
+          if (pr.s < 0.5 * L) {
+            const double d = pr.s + pr.distance;
+            if (!at_start.count(a) || d < at_start[a]) at_start[a] = d;
+          } else {
+            const double d = L - pr.s + pr.distance;
+            if (!at_end.count(a) || d < at_end[a]) at_end[a] = d;
+          }
+        };
+        for (size_t s : vls_[m].succ) attach(s, vls_[m].centre.back());
+        for (size_t p : vls_[m].pred) attach(p, vls_[m].centre.front());
+      }
+      auto closest = [](const std::map<int, double>& m) {
+        int best = -1;
+        double d = 1e300;
+        for (const auto& [a, dist] : m) {
+          if (dist < d) {
+            d = dist;
+            best = a;
+          }
+        }
+        return best;
+      };
+      const int a0 = closest(at_start), a1 = closest(at_end);
+      osm::Way w;
+      w.id = way_id++;
+      const auto simple = simplify(mid, 0.2);
+      if (a0 >= 0) w.nodes.push_back(areas_[a0].node);
+      for (const auto& p : simple) {
+        const int64_t id = next_osm_node_++;
+        addOsmNode(id, p);
+        w.nodes.push_back(id);
+      }
+      if (a1 >= 0 && (a1 != a0 || w.nodes.size() > 2)) w.nodes.push_back(areas_[a1].node);
+      const int lanes = fwd_max + bwd_max;
+      w.tags["highway"] = std::max(fwd_max, bwd_max) >= 2 ? "secondary" : "residential";
+      w.tags["lanes"] = std::to_string(std::max(1, lanes));
+      if (bwd_max == 0) {
+        w.tags["oneway"] = "yes";
+      } else {
+        w.tags["lanes:forward"] = std::to_string(fwd_max);
+        w.tags["lanes:backward"] = std::to_string(bwd_max);
+      }
+      w.tags["lanemap:source"] = "lanelet2";
+      comp.way_id = w.id;
+      comp.way_line = centre;  // for the direction of each lanelet
+      roads_.ways.push_back(std::move(w));
+      ++stats_.roads;
+    }
+    if (roads_.ways.empty()) throw std::runtime_error(path_ + ": no road could be derived from the lanelets");
+    // Drop the junction nodes no way uses; bounds from the nodes.
+    std::set<int64_t> used;
+    for (const auto& w : roads_.ways) used.insert(w.nodes.begin(), w.nodes.end());
+    for (auto it = roads_.nodes.begin(); it != roads_.nodes.end();) {
+      it = used.count(it->first) ? std::next(it) : roads_.nodes.erase(it);
+    }
+    osm::Bounds b{1e9, 1e9, -1e9, -1e9};
+    for (const auto& [id, n] : roads_.nodes) {
+      b.min_lat = std::min(b.min_lat, n.lat);
+      b.max_lat = std::max(b.max_lat, n.lat);
+      b.min_lon = std::min(b.min_lon, n.lon);
+      b.max_lon = std::max(b.max_lon, n.lon);
+    }
+    roads_.bounds = b;
+    skeleton::SkeletonOptions so;
+    so.origin = origin_;
+    skeleton_ = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(roads_, so));
+  }
+
+  // 8. Truth labels in terms of the skeleton.
+  void labelTruth() {
+    const auto& sk = *skeleton_;
+    std::unordered_map<int64_t, int64_t> inter_of_node;
+    for (const auto& in : sk.intersections()) {
+      for (int64_t n : in.osm_nodes) inter_of_node[n] = in.id;
+    }
+    std::map<std::pair<int64_t, bool>, int64_t> road_of;  // (way, along) -> road id
+    for (const auto& r : sk.roads()) road_of[{r.way_id, r.along_way}] = r.id;
+    for (auto& v : vls_) {
+      if (v.junction) continue;
+      const auto& comp = comps_[v.comp];
+      const Vector2d mid = resample(v.centre, 3)[1];
+      const bool along = comp.way_id >= 0 && project(comp.way_line, mid).tangent.dot(project(v.centre, mid).tangent) > 0;
+      auto it = road_of.find({comp.way_id, along});
+      if (it != road_of.end()) {
+        const auto* r = sk.road(it->second);
+        v.ll.road_id = r->id;
+        v.ll.from_node = r->from;
+        v.ll.to_node = r->to;
+        v.ll.index_from_left = impl_->right_hand ? v.left_same : v.right_same;
+        continue;
+      }
+      // The skeleton has no road there (a piece inside a merged intersection): a junction lanelet
+      // of the nearest intersection.
+      ++stats_.unassigned_lanelets;
+      v.junction = true;
+      const skeleton::Intersection* best = nullptr;
+      double bd = 1e300;
+      for (const auto& in : sk.intersections()) {
+        const double d = (in.centre - mid).norm();
+        if (d < bd) {
+          bd = d;
+          best = &in;
+        }
+      }
+      v.ll.intersection_id = best ? best->id : -1;
+    }
+    for (auto& v : vls_) {
+      if (!v.junction) continue;
+      v.ll.kind = LaneletKind::kIntersection;
+      if (v.area >= 0) {
+        auto it = inter_of_node.find(areas_[v.area].node);
+        v.ll.intersection_id = it != inter_of_node.end() ? it->second : areas_[v.area].node;
+      }
+      const double h = headingChange(v.centre);
+      v.ll.turn = h > 0.5 ? map::TurnDirection::kLeft : h < -0.5 ? map::TurnDirection::kRight
+                                                         : map::TurnDirection::kStraight;
+    }
+    // The truth: the vehicle lanelets, their bounds and stop lines.
+    auto& truth = impl_->truth;
+    truth.origin_lat = origin_.lat;
+    truth.origin_lon = origin_.lon;
+    truth.origin_alt = origin_.alt;
+    std::set<int64_t> lines;
+    for (auto& v : vls_) {
+      for (size_t s : v.succ) v.ll.successors.push_back(vls_[s].ll.id);
+      lines.insert(v.ll.left_id);
+      lines.insert(v.ll.right_id);
+      if (v.ll.stop_line_id) lines.insert(*v.ll.stop_line_id);
+      truth.lanelets.push_back(v.ll);
+      (v.junction ? stats_.junction_lanelets : stats_.road_lanelets)++;
+    }
+    for (const auto& l : file_.map.lines) {
+      if (lines.count(l.id)) truth.lines.push_back(l);
+    }
+    for (const auto& l : new_lines_) {
+      if (lines.count(l.id)) truth.lines.push_back(l);
+    }
+    // Lateral slots for laneOffset: the road is the cross-section.
+    for (auto& v : vls_) {
+      if (v.junction) continue;
+      detail::LaneSlot slot;
+      slot.cross_section = v.comp;
+      const auto& comp = comps_[v.comp];
+      const Vector2d mid = resample(v.centre, 3)[1];
+      slot.dir = project(comp.way_line, mid).tangent.dot(project(v.centre, mid).tangent) > 0 ? 1 : -1;
+      slot.rank_curb = impl_->right_hand ? v.right_same : v.left_same;
+      slot.rank_centre = impl_->right_hand ? v.left_same : v.right_same;
+      impl_->slots[v.ll.id] = slot;
+    }
+  }
+
+  void addFill(Surface s, detail::Layer layer, std::vector<Vector2d> poly, int64_t lanelet = -1) {
+    if (poly.size() < 3) return;
+    detail::FillPrimitive f;
+    f.surface = s;
+    f.layer = layer;
+    f.lanelet = lanelet;
+    f.polygon = std::move(poly);
+    impl_->fills.push_back(std::move(f));
+  }
+
+  // A band of `width` centred `offset` to the left of pts[a..b] (arc lengths).
+  void stroke(const std::vector<Vector2d>& pts, double a, double b, double offset, double width, Surface s,
+              detail::Layer layer) {
+    std::vector<double> cum(pts.size(), 0.0);
+    for (size_t i = 1; i < pts.size(); ++i) cum[i] = cum[i - 1] + (pts[i] - pts[i - 1]).norm();
+    auto interp = [&](double x) {
+      size_t i = std::upper_bound(cum.begin(), cum.end(), x) - cum.begin();
+      i = std::clamp<size_t>(i, 1, cum.size() - 1);
+      const double l = cum[i] - cum[i - 1];
+      const double u = l > 0 ? std::clamp((x - cum[i - 1]) / l, 0.0, 1.0) : 0.0;
+      return Vector2d(pts[i - 1] + u * (pts[i] - pts[i - 1]));
+    };
+    std::vector<Vector2d> sub{interp(a)};
+    for (size_t i = 0; i < cum.size(); ++i) {
+      if (cum[i] > a + 1e-3 && cum[i] < b - 1e-3) sub.push_back(pts[i]);
+    }
+    sub.push_back(interp(b));
+    if ((sub.back() - sub.front()).norm() < 1e-4) return;
+    std::vector<double> d1(sub.size(), offset + width / 2.0), d2(sub.size(), offset - width / 2.0);
+    auto left = geom::offsetPolyline(sub, d1);
+    const auto right = geom::offsetPolyline(sub, d2);
+    left.insert(left.end(), right.rbegin(), right.rend());
+    addFill(s, layer, std::move(left));
+  }
+
+  // 9. The scene.
+  void buildScene() {
+    // Lanes: road lanelets carry their id; junction lanelets are intersection asphalt.
+    for (const auto& v : vls_) {
+      if (v.junction) addFill(Surface::kIntersection, detail::kLayerIntersection, v.poly);
+      else addFill(Surface::kAsphalt, detail::kLayerLane, v.poly, v.ll.id);
+    }
+    // Other lanelets: bicycle lanes, walkways, crosswalks.
+    for (const auto& l : file_.map.lanelets) {
+      const auto st = file_.lanelet_subtype.find(l.id);
+      const std::string subtype = st == file_.lanelet_subtype.end() ? "" : st->second;
+      const auto* lb = file_.map.line(l.left_id);
+      const auto* rb = file_.map.line(l.right_id);
+      if (!lb || !rb || isVehicleSubtype(subtype)) continue;
+      auto left = xy(lb->points), right = xy(rb->points);
+      if (left.size() < 2 || right.size() < 2) continue;
+      if (direction(left).dot(direction(right)) < 0) std::reverse(right.begin(), right.end());
+      std::vector<Vector2d> poly = left;
+      poly.insert(poly.end(), right.rbegin(), right.rend());
+      if (subtype == "bicycle_lane") {
+        addFill(Surface::kBikeLane, detail::kLayerShoulder, poly);
+      } else if (subtype == "walkway") {
+        addFill(Surface::kSidewalk, detail::kLayerSidewalk, poly);
+      } else if (subtype == "crosswalk") {
+        // Zebra stripes across the walking direction: 0.5 m of paint every 1 m.
+        const double len = 0.5 * (length(left) + length(right));
+        if (len < 0.6) continue;
+        const size_t n = static_cast<size_t>(std::ceil(len / 0.05)) + 1;
+        const auto L = resample(left, n), R = resample(right, n);
+        auto at = [&](const std::vector<Vector2d>& P, double s) {
+          const double f = std::clamp(s / len, 0.0, 1.0) * static_cast<double>(n - 1);
+          const size_t i = std::min(static_cast<size_t>(f), n - 2);
+          return Vector2d(P[i] + (f - static_cast<double>(i)) * (P[i + 1] - P[i]));
+        };
+        for (double s = 0.25; s + 0.5 <= len - 0.1; s += 1.0) {
+          // Inset 0.2 m from the ends of each stripe.
+          Vector2d a0 = at(L, s), b0 = at(R, s), a1 = at(L, s + 0.5), b1 = at(R, s + 0.5);
+          const Vector2d u0 = (b0 - a0).normalized(), u1 = (b1 - a1).normalized();
+          addFill(Surface::kCrosswalkPaint, detail::kLayerCrosswalk,
+                  {a0 + 0.2 * u0, a1 + 0.2 * u1, b1 - 0.2 * u1, b0 - 0.2 * u0});
+        }
+        ++stats_.crosswalks;
+      }
+    }
+    // Which side of a line the road is on: from a lanelet that uses it as a bound.
+    std::map<int64_t, std::pair<int64_t, int>> outward;  // key -> (line id, +1: paint to its left)
+    auto note = [&](int64_t line_id, bool is_left, const std::vector<Vector2d>& dir_pts) {
+      const auto* ls = anyLine(line_id);
+      if (!ls) return;
+      const int64_t k = key(line_id);
+      if (outward.count(k)) return;
+      const auto pts = xy(ls->points);
+      if (pts.size() < 2) return;
+      const bool same = direction(pts).dot(direction(dir_pts)) > 0;
+      outward[k] = {line_id, (is_left == same) ? 1 : -1};
+    };
+    for (const auto& v : vls_) {
+      note(v.ll.left_id, true, v.centre);
+      note(v.ll.right_id, false, v.centre);
+    }
+    for (const auto& l : file_.map.lanelets) {
+      const auto st = file_.lanelet_subtype.find(l.id);
+      if (st == file_.lanelet_subtype.end() || st->second != "bicycle_lane" || l.centre.size() < 2) continue;
+      note(l.left_id, true, xy(l.centre));
+      note(l.right_id, false, xy(l.centre));
+    }
+    std::set<int64_t> painted;
+    for (const auto& ls : file_.map.lines) {
+      const int64_t k = key(ls.id);
+      if (!painted.insert(k).second) continue;
+      const auto pts = xy(ls.points);
+      if (pts.size() < 2) continue;
+      const double L = length(pts);
+      if (L < 1e-3) continue;
+      switch (ls.type) {
+        case LineType::kCurb: {
+          auto it = outward.find(k);
+          const int out = it == outward.end() ? 0 : it->second.second;
+          // The curb band beside the road edge, the sidewalk behind it.
+          const auto& geo_pts = it == outward.end() ? pts : xy(anyLine(it->second.first)->points);
+          stroke(geo_pts, 0.0, length(geo_pts), out * kCurbWidth / 2.0, kCurbWidth, Surface::kCurb, detail::kLayerCurb);
+          if (out != 0) {
+            stroke(geo_pts, 0.0, length(geo_pts), out * (kCurbWidth + kSidewalkWidth / 2.0), kSidewalkWidth,
+                   Surface::kSidewalk, detail::kLayerSidewalk);
+          }
+          ++stats_.curbs;
+          break;
+        }
+        case LineType::kDashed:
+          for (double a = 0.0; a < L; a += kDashPeriod) {
+            stroke(pts, a, std::min(L, a + kDashLength), 0.0, kLinePaintWidth, Surface::kDashedPaint,
+                   detail::kLayerLinePaint);
+          }
+          ++stats_.painted_lines;
+          break;
+        case LineType::kSolid:
+          stroke(pts, 0.0, L, 0.0, kLinePaintWidth, Surface::kSolidPaint, detail::kLayerLinePaint);
+          ++stats_.painted_lines;
+          break;
+        case LineType::kSolidSolid:
+          stroke(pts, 0.0, L, kDoubleLineOffset, 0.1, Surface::kSolidPaint, detail::kLayerLinePaint);
+          stroke(pts, 0.0, L, -kDoubleLineOffset, 0.1, Surface::kSolidPaint, detail::kLayerLinePaint);
+          ++stats_.painted_lines;
+          break;
+        case LineType::kStopLine:
+          stroke(pts, 0.0, L, 0.0, kStopLineWidth, Surface::kStopLinePaint, detail::kLayerStopLine);
+          ++stats_.stop_lines;
+          break;
+        case LineType::kVirtual:
+          break;
+      }
+    }
+    double km = 0.0;
+    for (const auto& v : vls_) {
+      if (!v.junction) km += length(v.centre);
+    }
+    impl_->stats.driving_lane_km = km / 1000.0;
+  }
+
+  struct Area {
+    std::vector<size_t> lanelets;
+    Vector2d centre = Vector2d::Zero();
+    int64_t node = 0;
+  };
+  struct Comp {
+    std::vector<size_t> lanelets;
+    int64_t way_id = -1;
+    std::vector<Vector2d> way_line;
+  };
+
+  std::string path_;
+  geo::LatLonAlt origin_;
+  geo::LocalFrame frame_;
+  std::unique_ptr<SimWorld::Impl> impl_;
+  io::Lanelet2File file_;
+  Extra extra_;
+  Lanelet2WorldStats stats_;
+  int64_t next_id_ = 1;
+  int64_t next_osm_node_ = 1;
+  std::map<int64_t, int64_t> extra_keys_;
+  std::vector<map::LineString> new_lines_;
+  std::vector<VL> vls_;
+  std::vector<std::set<size_t>> conflicts_;
+  std::vector<Area> areas_;
+  std::vector<Comp> comps_;
+  osm::OsmData roads_;
+  std::unique_ptr<skeleton::Skeleton> skeleton_;
+  std::map<int64_t, int64_t> split_twin_;
+};
+
+}  // namespace
+
+geo::LatLonAlt lanelet2MapCentre(const std::string& path) {
+  const Extra e = readExtra(path);
+  if (e.nodes == 0) throw std::runtime_error(path + ": no node with a location");
+  geo::LatLonAlt o;
+  o.lat = 0.5 * (e.min_lat + e.max_lat);
+  o.lon = 0.5 * (e.min_lon + e.max_lon);
+  return o;
+}
+
+Lanelet2World buildLanelet2World(const std::string& path, const geo::LatLonAlt& origin,
+                                 const WorldOptions& options) {
+  return Builder(path, origin, options).build();
+}
+
+}  // namespace lanemap::sim

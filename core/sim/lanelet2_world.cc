@@ -432,8 +432,14 @@ class Builder {
       for (size_t b = 0; b < vls_.size(); ++b) {
         if (a == b) continue;
         const VL &A = vls_[a], &B = vls_[b];
-        if ((A.left.back() - B.left.front()).norm() < kSuccessorGap &&
-            (A.right.back() - B.right.front()).norm() < kSuccessorGap) {
+        const bool l = (A.left.back() - B.left.front()).norm() < kSuccessorGap;
+        const bool r = (A.right.back() - B.right.front()).norm() < kSuccessorGap;
+        // One bound shared and the lane goes on (it widens or narrows where the other begins).
+        const auto ta = A.centre.back() - A.centre[A.centre.size() - 2];
+        const auto tb = B.centre[1] - B.centre.front();
+        const bool goes_on = (A.centre.back() - B.centre.front()).norm() < 1.5 &&
+                             ta.normalized().dot(tb.normalized()) > std::cos(30.0 * kPi / 180.0);
+        if ((l && r) || ((l || r) && goes_on)) {
           vls_[a].succ.push_back(b);
           vls_[b].pred.push_back(a);
         }
@@ -505,6 +511,19 @@ class Builder {
     for (size_t a = 0; a < vls_.size(); ++a) {
       if (!conflicts_[a].empty()) vls_[a].junction = true;
     }
+    // Branches and merges that are not side by side (the lanes go different ways).
+    for (const auto& v : vls_) {
+      for (const auto* set : {&v.succ, &v.pred}) {
+        bool apart = false;
+        for (size_t x : *set) {
+          for (size_t y : *set) {
+            if (x < y && !vls_[x].lateral.count(y)) apart = true;
+          }
+        }
+        if (!apart) continue;
+        for (size_t x : *set) vls_[x].junction = true;
+      }
+    }
   }
 
   // 5. Junction areas and their OSM nodes.
@@ -519,6 +538,15 @@ class Builder {
       for (size_t b : vls_[a].succ) link(b);
       for (size_t b : vls_[a].pred) link(b);
       for (size_t b : vls_[a].lateral) link(b);
+    }
+    for (const auto& v : vls_) {  // pieces that branch from or merge into one lanelet
+      for (const auto* set : {&v.succ, &v.pred}) {
+        for (size_t x : *set) {
+          for (size_t y : *set) {
+            if (vls_[x].junction && vls_[y].junction) uf.join(x, y);
+          }
+        }
+      }
     }
     std::map<size_t, int> area_of_root;
     for (size_t a = 0; a < vls_.size(); ++a) {
@@ -801,15 +829,110 @@ class Builder {
     truth.origin_lat = origin_.lat;
     truth.origin_lon = origin_.lon;
     truth.origin_alt = origin_.alt;
-    std::set<int64_t> lines;
-    for (auto& v : vls_) {
-      for (size_t s : v.succ) v.ll.successors.push_back(vls_[s].ll.id);
-      lines.insert(v.ll.left_id);
-      lines.insert(v.ll.right_id);
-      if (v.ll.stop_line_id) lines.insert(*v.ll.stop_line_id);
-      truth.lanelets.push_back(v.ll);
-      (v.junction ? stats_.junction_lanelets : stats_.road_lanelets)++;
+    // Junction lanelets drawn in pieces (road -> J1 -> J2 -> road) are joined into one
+    // intersection lanelet per path, as lanemap's truth has one lanelet per junction connection.
+    std::vector<std::vector<size_t>> paths;
+    std::map<size_t, std::vector<size_t>> paths_from;  // entry piece -> path indices
+    for (size_t j = 0; j < vls_.size(); ++j) {
+      const VL& v = vls_[j];
+      if (!v.junction) continue;
+      bool entry = v.pred.empty();
+      for (size_t p : v.pred) entry |= !vls_[p].junction;
+      if (!entry) continue;
+      std::vector<size_t> path{j};
+      std::function<void()> walk = [&]() {
+        const VL& cur = vls_[path.back()];
+        bool road_next = cur.succ.empty();
+        for (size_t s : cur.succ) road_next |= !vls_[s].junction;
+        if (road_next || path.size() >= 8) {
+          paths_from[path.front()].push_back(paths.size());
+          paths.push_back(path);
+        }
+        if (path.size() >= 8 || paths.size() > 20000) return;
+        for (size_t s : cur.succ) {
+          if (!vls_[s].junction || std::find(path.begin(), path.end(), s) != path.end()) continue;
+          path.push_back(s);
+          walk();
+          path.pop_back();
+        }
+      };
+      walk();
     }
+    std::vector<map::Lanelet> junction_out;
+    std::set<size_t> in_paths;
+    std::vector<int64_t> path_id(paths.size());
+    for (size_t k = 0; k < paths.size(); ++k) {
+      const auto& path = paths[k];
+      in_paths.insert(path.begin(), path.end());
+      if (path.size() == 1) {
+        path_id[k] = vls_[path[0]].ll.id;
+        continue;
+      }
+      path_id[k] = next_id_++;
+      ++stats_.joined_junction_paths;
+    }
+    for (size_t k = 0; k < paths.size(); ++k) {
+      const auto& path = paths[k];
+      map::Lanelet ll = vls_[path.front()].ll;
+      if (path.size() > 1) {
+        std::vector<Vector2d> left, right, centre;
+        auto append = [](std::vector<Vector2d>& to, const std::vector<Vector2d>& from) {
+          for (const auto& p : from) {
+            if (to.empty() || (p - to.back()).norm() > 1e-3) to.push_back(p);
+          }
+        };
+        for (size_t j : path) {
+          append(left, vls_[j].left);
+          append(right, vls_[j].right);
+          append(centre, vls_[j].centre);
+        }
+        ll.id = path_id[k];
+        ll.left_id = addLine(anyLine(vls_[path.front()].ll.left_id)->type, left, next_id_);
+        ll.right_id = addLine(anyLine(vls_[path.front()].ll.right_id)->type, right, next_id_);
+        ll.centre.clear();
+        for (const auto& p : centre) ll.centre.emplace_back(p.x(), p.y(), 0.0);
+        ll.stop_line_id = vls_[path.back()].ll.stop_line_id;
+        const double h = headingChange(centre);
+        ll.turn = h > 0.5 ? map::TurnDirection::kLeft : h < -0.5 ? map::TurnDirection::kRight
+                                                       : map::TurnDirection::kStraight;
+      }
+      ll.successors.clear();
+      for (size_t s : vls_[path.back()].succ) {
+        if (!vls_[s].junction) ll.successors.push_back(vls_[s].ll.id);
+      }
+      junction_out.push_back(std::move(ll));
+    }
+    auto successorIds = [&](const VL& v) {
+      std::vector<int64_t> out;
+      for (size_t s : v.succ) {
+        if (!vls_[s].junction) {
+          out.push_back(vls_[s].ll.id);
+        } else if (auto it = paths_from.find(s); it != paths_from.end()) {
+          for (size_t k : it->second) out.push_back(path_id[k]);
+        }
+      }
+      return out;
+    };
+    std::set<int64_t> lines;
+    auto keep = [&](const map::Lanelet& ll) {
+      lines.insert(ll.left_id);
+      lines.insert(ll.right_id);
+      if (ll.stop_line_id) lines.insert(*ll.stop_line_id);
+      truth.lanelets.push_back(ll);
+      (ll.kind == LaneletKind::kIntersection ? stats_.junction_lanelets : stats_.road_lanelets)++;
+    };
+    for (auto& v : vls_) {
+      if (v.junction) {
+        if (in_paths.count(&v - vls_.data())) continue;
+        map::Lanelet ll = v.ll;  // on a cycle of junction pieces: as drawn
+        ll.successors = successorIds(v);
+        keep(ll);
+        continue;
+      }
+      v.ll.successors = successorIds(v);
+      keep(v.ll);
+    }
+    for (const auto& ll : junction_out) keep(ll);
     for (const auto& l : file_.map.lines) {
       if (lines.count(l.id)) truth.lines.push_back(l);
     }

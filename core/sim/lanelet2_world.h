@@ -52,6 +52,7 @@ struct Lanelet2WorldStats {
   size_t junction_areas = 0;
   size_t roads = 0;               // OSM ways derived
   size_t unassigned_lanelets = 0; // road lanelets whose way the skeleton dropped (made junction)
+  size_t joined_junction_paths = 0; // truth junction lanelets joined from several drawn pieces
   size_t crosswalks = 0, stop_lines = 0, painted_lines = 0, curbs = 0;
 };
 

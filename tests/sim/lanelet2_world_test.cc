@@ -16,6 +16,295 @@ namespace {
 
 using namespace lanemap;
 
+constexpr double kPi = 3.14159265358979323846;
+
+// A hand-made Lanelet2 map (ENU metres around lat 49, lon 8.4), right-hand traffic:
+//  - the west road: two lanelets side by side driving east, x 0..60 (left lane y 0..3.5, right
+//    lane y -3.5..0), road_border / dashed / curbstone, a stop line at x = 59;
+//  - a junction at x 60..80 where each lane branches in two: the left lane straight on (J3) or
+//    left to the north (J4), the right lane straight on (J1) or right to the south (J2);
+//  - the east road: two lanelets x 80..140 with a crosswalk lanelet across it at x 100..104;
+//  - the north road: one lanelet x 75..78.5 driving north; the south road: one two-way lanelet
+//    (one_way=no) x 71.5..75 drawn driving south.
+struct HandMap {
+  std::map<std::string, int64_t> lanelet;  // name -> relation id
+  std::string xml;
+};
+
+HandMap handMap() {
+  HandMap m;
+  geo::LatLonAlt o;
+  o.lat = 49.0;
+  o.lon = 8.4;
+  const geo::LocalFrame frame(o);
+  std::string nodes, ways, rels;
+  int64_t next = 1000;
+  char buf[256];
+  auto way = [&](const std::vector<Eigen::Vector2d>& pts, const std::string& type, const std::string& subtype) {
+    const int64_t id = next++;
+    std::string w = "  <way id=\"" + std::to_string(id) + "\">\n";
+    for (const auto& p : pts) {
+      const int64_t nid = next++;
+      const auto g = frame.toWgs84(Eigen::Vector3d(p.x(), p.y(), 0.0));
+      std::snprintf(buf, sizeof(buf), "  <node id=\"%lld\" lat=\"%.10f\" lon=\"%.10f\"><tag k=\"ele\" v=\"0\"/></node>\n",
+                    static_cast<long long>(nid), g.lat, g.lon);
+      nodes += buf;
+      w += "    <nd ref=\"" + std::to_string(nid) + "\"/>\n";
+    }
+    w += "    <tag k=\"type\" v=\"" + type + "\"/>\n";
+    if (!subtype.empty()) w += "    <tag k=\"subtype\" v=\"" + subtype + "\"/>\n";
+    ways += w + "  </way>\n";
+    return id;
+  };
+  auto line = [](double x0, double y0, double x1, double y1) {
+    std::vector<Eigen::Vector2d> p;
+    for (int i = 0; i <= 6; ++i) p.emplace_back(x0 + (x1 - x0) * i / 6.0, y0 + (y1 - y0) * i / 6.0);
+    return p;
+  };
+  // Quarter circle about c with radius r from angle a0 to a1 (degrees, 0 = +x).
+  auto arc = [](Eigen::Vector2d c, double r, double a0, double a1) {
+    std::vector<Eigen::Vector2d> p;
+    for (int i = 0; i <= 12; ++i) {
+      const double a = (a0 + (a1 - a0) * i / 12.0) * kPi / 180.0;
+      p.push_back(c + r * Eigen::Vector2d(std::cos(a), std::sin(a)));
+    }
+    return p;
+  };
+  auto lanelet = [&](const std::string& name, int64_t left, int64_t right, const std::string& subtype,
+                     const std::string& one_way) {
+    const int64_t id = next++;
+    m.lanelet[name] = id;
+    rels += "  <relation id=\"" + std::to_string(id) + "\">\n    <member type=\"way\" ref=\"" + std::to_string(left) +
+            "\" role=\"left\"/>\n    <member type=\"way\" ref=\"" + std::to_string(right) +
+            "\" role=\"right\"/>\n    <tag k=\"type\" v=\"lanelet\"/>\n    <tag k=\"subtype\" v=\"" + subtype +
+            "\"/>\n    <tag k=\"location\" v=\"urban\"/>\n    <tag k=\"one_way\" v=\"" + one_way + "\"/>\n  </relation>\n";
+  };
+  // West road.
+  const int64_t a = way(line(0, 3.5, 60, 3.5), "road_border", "");
+  const int64_t b = way(line(0, 0, 60, 0), "line_thin", "dashed");
+  const int64_t c = way(line(0, -3.5, 60, -3.5), "curbstone", "high");
+  lanelet("west_left", a, b, "road", "yes");
+  lanelet("west_right", b, c, "road", "yes");
+  way(line(59, -3.5, 59, 3.5), "stop_line", "");
+  // Junction.
+  const int64_t v1 = way(line(60, 3.5, 80, 3.5), "virtual", "");
+  const int64_t v2 = way(line(60, 0, 80, 0), "virtual", "");
+  const int64_t v3 = way(line(60, -3.5, 80, -3.5), "virtual", "");
+  lanelet("j_straight_left", v1, v2, "road", "yes");
+  lanelet("j_straight_right", v2, v3, "road", "yes");
+  const int64_t r_out = way(arc({60, -15}, 15.0, 90, 0), "virtual", "");
+  const int64_t r_in = way(arc({60, -15}, 11.5, 90, 0), "virtual", "");
+  lanelet("j_right", r_out, r_in, "road", "yes");
+  const int64_t l_in = way(arc({60, 18.5}, 15.0, -90, 0), "virtual", "");
+  const int64_t l_out = way(arc({60, 18.5}, 18.5, -90, 0), "virtual", "");
+  lanelet("j_left", l_in, l_out, "road", "yes");
+  // East road and its crosswalk.
+  const int64_t d = way(line(80, 3.5, 140, 3.5), "road_border", "");
+  const int64_t e = way(line(80, 0, 140, 0), "line_thin", "dashed");
+  const int64_t f = way(line(80, -3.5, 140, -3.5), "curbstone", "high");
+  lanelet("east_left", d, e, "road", "yes");
+  lanelet("east_right", e, f, "road", "yes");
+  const int64_t cw_left = way(line(100, -3.5, 100, 3.5), "pedestrian_marking", "");
+  const int64_t cw_right = way(line(104, -3.5, 104, 3.5), "pedestrian_marking", "");
+  lanelet("crosswalk", cw_left, cw_right, "crosswalk", "no");
+  // North road (one way) and south road (one two-way lanelet, drawn driving south).
+  const int64_t nl = way(line(75, 18.5, 75, 48.5), "curbstone", "high");
+  const int64_t nr = way(line(78.5, 18.5, 78.5, 48.5), "curbstone", "high");
+  lanelet("north", nl, nr, "road", "yes");
+  const int64_t sl = way(line(75, -15, 75, -45), "curbstone", "high");
+  const int64_t sr = way(line(71.5, -15, 71.5, -45), "curbstone", "high");
+  lanelet("south", sl, sr, "road", "no");
+  m.xml = "<?xml version=\"1.0\"?>\n<osm version=\"0.6\" generator=\"lanelet2_world_test\">\n" + nodes + ways + rels + "</osm>\n";
+  return m;
+}
+
+struct Built {
+  HandMap map;
+  sim::Lanelet2World world;
+};
+
+const Built& handWorld() {
+  static Built* b = [] {
+    auto* out = new Built;
+    out->map = handMap();
+    lanemap::testing::TempDir dir("l2world");
+    const std::string path = dir.str("hand.osm");
+    std::ofstream(path) << out->map.xml;
+    geo::LatLonAlt origin;
+    origin.lat = 49.0;
+    origin.lon = 8.4;
+    out->world = sim::buildLanelet2World(path, origin, sim::WorldOptions{});
+    return out;
+  }();
+  return *b;
+}
+
+const osm::Way* wayThrough(const osm::OsmData& d, const skeleton::Skeleton& sk, double x, double y) {
+  // The way whose atomic road passes closest to (x, y).
+  const auto m = sk.nearestRoads(Eigen::Vector2d(x, y), 10.0);
+  if (m.empty()) return nullptr;
+  const auto* r = sk.road(m.front().road_id);
+  for (const auto& w : d.ways) {
+    if (w.id == r->way_id) return &w;
+  }
+  return nullptr;
+}
+
+TEST(Lanelet2World, DerivedOsmHasTheRoadsTheJunctionNodeAndLaneTags) {
+  const auto& b = handWorld();
+  const auto& d = b.world.roads;
+  ASSERT_EQ(d.ways.size(), 4u);
+  // Exactly one node is shared, by all four ways: the junction node.
+  std::map<int64_t, int> uses;
+  for (const auto& w : d.ways) {
+    for (int64_t n : std::set<int64_t>(w.nodes.begin(), w.nodes.end())) uses[n]++;
+  }
+  std::vector<int64_t> shared;
+  for (const auto& [n, k] : uses) {
+    if (k > 1) shared.push_back(n);
+  }
+  ASSERT_EQ(shared.size(), 1u);
+  EXPECT_EQ(uses[shared[0]], 4);
+  const auto& sk = *b.world.skeleton;
+  const auto* junction = sk.intersection(shared[0]);
+  ASSERT_NE(junction, nullptr);
+  EXPECT_FALSE(junction->dead_end);
+  EXPECT_NEAR(junction->centre.x(), 70.0, 6.0);
+  EXPECT_NEAR(junction->centre.y(), 0.0, 6.0);
+  // Lane tags from the lanelets.
+  const auto* west = wayThrough(d, sk, 30, 0);
+  const auto* east = wayThrough(d, sk, 120, 0);
+  const auto* north = wayThrough(d, sk, 76.75, 35);
+  const auto* south = wayThrough(d, sk, 73.25, -35);
+  ASSERT_TRUE(west && east && north && south);
+  EXPECT_EQ(west->tag("oneway"), "yes");
+  EXPECT_EQ(west->tag("lanes"), "2");
+  EXPECT_EQ(east->tag("oneway"), "yes");
+  EXPECT_EQ(east->tag("lanes"), "2");
+  EXPECT_EQ(north->tag("oneway"), "yes");
+  EXPECT_EQ(north->tag("lanes"), "1");
+  EXPECT_EQ(south->tag("oneway"), "");
+  EXPECT_EQ(south->tag("lanes:forward"), "1");
+  EXPECT_EQ(south->tag("lanes:backward"), "1");
+  // The west way runs along the middle of its two lanes (y = 0), east to the junction.
+  const auto m = sk.nearestRoads(Eigen::Vector2d(30, 0), 10.0);
+  ASSERT_FALSE(m.empty());
+  EXPECT_LT(m.front().distance, 0.3);
+  const auto* west_road = sk.road(m.front().road_id);
+  EXPECT_EQ(west_road->to, junction->id);
+  EXPECT_EQ(west_road->reverse_id, -1);
+  EXPECT_EQ(sk.roads().size(), 5u);  // four ways, the south one in both directions
+}
+
+TEST(Lanelet2World, TruthIsTheDrawnLaneletsLabelledWithTheDerivedRoads) {
+  const auto& b = handWorld();
+  const auto& t = b.world.world->truth();
+  const auto& sk = *b.world.skeleton;
+  // 10 vehicle lanelets drawn (the crosswalk is not one), the two-way one split in two.
+  EXPECT_EQ(b.world.stats.map_vehicle_lanelets, 10u);
+  EXPECT_EQ(b.world.stats.two_way_split, 1u);
+  EXPECT_EQ(t.lanelets.size(), 11u);
+  EXPECT_EQ(b.world.stats.junction_lanelets, 4u);
+  const auto* wl = t.lanelet(b.map.lanelet.at("west_left"));
+  const auto* wr = t.lanelet(b.map.lanelet.at("west_right"));
+  ASSERT_TRUE(wl && wr);
+  EXPECT_EQ(wl->kind, map::LaneletKind::kRoad);
+  EXPECT_EQ(wl->road_id, wr->road_id);
+  EXPECT_EQ(wl->index_from_left, 0);
+  EXPECT_EQ(wr->index_from_left, 1);
+  const auto* road = sk.road(wl->road_id);
+  ASSERT_NE(road, nullptr);
+  EXPECT_EQ(wl->from_node, road->from);
+  EXPECT_EQ(wl->to_node, road->to);
+  // The junction pieces: intersection lanelets of the junction, with their turns.
+  const std::map<std::string, map::TurnDirection> turns = {
+      {"j_straight_left", map::TurnDirection::kStraight}, {"j_straight_right", map::TurnDirection::kStraight},
+      {"j_left", map::TurnDirection::kLeft}, {"j_right", map::TurnDirection::kRight}};
+  for (const auto& [name, turn] : turns) {
+    const auto* j = t.lanelet(b.map.lanelet.at(name));
+    ASSERT_NE(j, nullptr) << name;
+    EXPECT_EQ(j->kind, map::LaneletKind::kIntersection) << name;
+    EXPECT_EQ(j->intersection_id, road->to) << name;
+    EXPECT_EQ(j->turn, turn) << name;
+  }
+  // Successors: each west lane branches in two; the right turn leads onto the south road.
+  EXPECT_EQ(wl->successors.size(), 2u);
+  EXPECT_EQ(wr->successors.size(), 2u);
+  const auto* jr = t.lanelet(b.map.lanelet.at("j_right"));
+  ASSERT_EQ(jr->successors.size(), 1u);
+  EXPECT_EQ(jr->successors[0], b.map.lanelet.at("south"));
+  // The south lanelet's reverse half runs north, on the east half of the drawn lanelet.
+  const auto twin_it = b.world.split_twin.find(b.map.lanelet.at("south"));
+  ASSERT_NE(twin_it, b.world.split_twin.end());
+  const auto* s_fwd = t.lanelet(b.map.lanelet.at("south"));
+  const auto* s_bwd = t.lanelet(twin_it->second);
+  ASSERT_TRUE(s_fwd && s_bwd);
+  EXPECT_LT(s_fwd->centre.back().y(), s_fwd->centre.front().y());
+  EXPECT_GT(s_bwd->centre.back().y(), s_bwd->centre.front().y());
+  EXPECT_NEAR(s_fwd->centre[s_fwd->centre.size() / 2].x(), 72.375, 0.05);
+  EXPECT_NEAR(s_bwd->centre[s_bwd->centre.size() / 2].x(), 74.125, 0.05);
+  EXPECT_EQ(sk.road(s_bwd->road_id)->reverse_id, s_fwd->road_id);
+}
+
+TEST(Lanelet2World, SampleGivesThePaintCurbsAndLaneletsAsDrawn) {
+  const auto& b = handWorld();
+  const auto& w = *b.world.world;
+  const int64_t wl = b.map.lanelet.at("west_left"), wr = b.map.lanelet.at("west_right");
+  // Inside each lane: asphalt carrying the lanelet id.
+  EXPECT_EQ(w.sample(30, 1.75).surface, sim::Surface::kAsphalt);
+  EXPECT_EQ(w.sample(30, 1.75).lanelet, wl);
+  EXPECT_EQ(w.sample(30, -1.75).surface, sim::Surface::kAsphalt);
+  EXPECT_EQ(w.sample(30, -1.75).lanelet, wr);
+  // The shared dashed line: paint on a dash (27..30 m), asphalt between dashes (30..36 m).
+  EXPECT_EQ(w.sample(28.5, 0.02).surface, sim::Surface::kDashedPaint);
+  EXPECT_EQ(w.sample(33.0, 0.02).surface, sim::Surface::kAsphalt);
+  // The outer bounds: curb (road_border and curbstone) just outside, sidewalk behind it.
+  EXPECT_EQ(w.sample(30, 3.57).surface, sim::Surface::kCurb);
+  EXPECT_EQ(w.sample(30, -3.57).surface, sim::Surface::kCurb);
+  EXPECT_EQ(w.sample(30, 4.8).surface, sim::Surface::kSidewalk);
+  EXPECT_EQ(w.sample(30, 8.0).surface, sim::Surface::kOffRoad);
+  // The stop line and the crosswalk's stripes.
+  EXPECT_EQ(w.sample(59.0, 1.0).surface, sim::Surface::kStopLinePaint);
+  EXPECT_EQ(w.sample(102.0, -3.0).surface, sim::Surface::kCrosswalkPaint);
+  EXPECT_EQ(w.sample(102.0, -2.5).surface, sim::Surface::kAsphalt);
+  // The junction is intersection asphalt without a lane.
+  EXPECT_EQ(w.sample(70.0, 1.75).surface, sim::Surface::kIntersection);
+  EXPECT_EQ(w.sample(70.0, 1.75).lanelet, -1);
+  // Lanes side by side are one lane apart; the two halves of the two-way lanelet face each other.
+  EXPECT_EQ(w.laneOffset(wr, wl), -1);
+  EXPECT_EQ(w.laneOffset(wl, wr), 1);
+  EXPECT_EQ(w.laneOffset(wl, wl), 0);
+  const int64_t s = b.map.lanelet.at("south");
+  EXPECT_EQ(w.laneOffset(s, b.world.split_twin.at(s)), -1);
+  EXPECT_FALSE(w.laneOffset(wl, s).has_value());
+}
+
+TEST(Lanelet2World, ADriveFollowsTheDrawnLanesThroughTheJunction) {
+  const auto& b = handWorld();
+  const auto& sk = *b.world.skeleton;
+  const auto& t = b.world.world->truth();
+  const auto* west = t.lanelet(b.map.lanelet.at("west_right"));
+  const auto* south = t.lanelet(b.map.lanelet.at("south"));
+  sim::DriveOptions o;
+  o.duration_s = 30.0;
+  o.route_nodes = {west->from_node, west->to_node, south->to_node};
+  const auto plan = sim::planDrive(sk, t, o);
+  ASSERT_EQ(plan.roads.size(), 2u);
+  EXPECT_EQ(plan.roads[0], west->road_id);
+  EXPECT_EQ(plan.roads[1], south->road_id);
+  // West road (right lane, perhaps after a lane change), the drawn right turn, the south road.
+  std::vector<int64_t> legs;
+  for (const auto& l : plan.legs) legs.push_back(l.lanelet);
+  EXPECT_NE(std::find(legs.begin(), legs.end(), b.map.lanelet.at("j_right")), legs.end());
+  EXPECT_EQ(legs.back(), south->id);
+  const sim::Trajectory traj(t, *b.world.world, plan, o);
+  EXPECT_GT(traj.length(), 60.0);
+  // The car ends on the south road's right half (x 71.5..73.25), driving south.
+  const auto end = traj.at(traj.duration()).vehicle_to_enu;
+  EXPECT_NEAR(end.translation().x(), 72.375, 0.5);
+  EXPECT_LT(end.linear().col(0).y(), -0.9);
+}
+
 const sim::Lanelet2World& karlsruhe() {
   static sim::Lanelet2World* w = [] {
     sim::WorldOptions o;

@@ -434,12 +434,16 @@ class Builder {
         const VL &A = vls_[a], &B = vls_[b];
         const bool l = (A.left.back() - B.left.front()).norm() < kSuccessorGap;
         const bool r = (A.right.back() - B.right.front()).norm() < kSuccessorGap;
-        // One bound shared and the lane goes on (it widens or narrows where the other begins).
-        const auto ta = A.centre.back() - A.centre[A.centre.size() - 2];
-        const auto tb = B.centre[1] - B.centre.front();
-        const bool goes_on = (A.centre.back() - B.centre.front()).norm() < 1.5 &&
-                             ta.normalized().dot(tb.normalized()) > std::cos(30.0 * kPi / 180.0);
-        if ((l && r) || ((l || r) && goes_on)) {
+        // Or the lane goes on where it widens or narrows, or where a two-way lanelet (split in
+        // halves) meets one-way ones: headings agree and the centre ends are close (one shared
+        // bound end: within half the wider lane; none: within 0.3 m).
+        const Vector2d ta = A.centre.back() - A.centre[A.centre.size() - 2];
+        const Vector2d tb = B.centre[1] - B.centre.front();
+        const bool ahead = ta.normalized().dot(tb.normalized()) > std::cos(35.0 * kPi / 180.0);
+        const double dc = (A.centre.back() - B.centre.front()).norm();
+        const double wide = std::max((A.left.back() - A.right.back()).norm(), (B.left.front() - B.right.front()).norm());
+        const bool goes_on = ahead && (((l || r) && dc < 0.5 * wide + 0.1) || dc < 0.3);
+        if ((l && r) || goes_on) {
           vls_[a].succ.push_back(b);
           vls_[b].pred.push_back(a);
         }

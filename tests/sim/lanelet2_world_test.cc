@@ -374,11 +374,27 @@ TEST(Lanelet2World, KarlsruheStats) {
     for (const auto& in : w.skeleton->intersections()) if (in.id == w.skeleton->road(rid)->from || in.id == w.skeleton->road(rid)->to) std::printf("  inter %ld at (%.0f,%.0f)\n", in.id, in.centre.x(), in.centre.y());
   }
   for (const auto& in : w.skeleton->intersections()) if (in.id == 17 || in.id == 21) std::printf("  inter %ld at (%.0f,%.0f)\n", in.id, in.centre.x(), in.centre.y());
+  for (const auto& l : t.lanelets) {
+    if (!l.successors.empty()) continue;
+    const Eigen::Vector2d e = l.centre.back().head<2>();
+    double best = 1e9; int64_t bid = -1; double bs = 0;
+    for (const auto& m : t.lanelets) {
+      if (m.id == l.id) continue;
+      for (size_t i = 0; i < m.centre.size(); ++i) {
+        const double d = (m.centre[i].head<2>() - e).norm();
+        if (d < best) { best = d; bid = m.id; bs = static_cast<double>(i) / m.centre.size(); }
+      }
+    }
+    std::printf("nosucc %s %ld at (%.1f,%.1f): nearest centre %ld at %.1f m (frac %.2f)\n", l.kind == map::LaneletKind::kRoad ? "road" : "junc", l.id, e.x(), e.y(), bid, best, bs);
+  }
   std::printf("road->J->road ok %zu bad %zu\n", ok, bad);
-  for (uint64_t seed = 1; seed <= 8; ++seed) {
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
     o.seed = seed;
     const auto p = sim::planDrive(*w.skeleton, t, o);
-    std::printf("seed %lu: %zu roads\n", seed, p.roads.size());
+    std::set<int64_t> distinct(p.roads.begin(), p.roads.end());
+    double len = 0;
+    for (int64_t r : distinct) len += w.skeleton->road(r)->length;
+    std::printf("seed %lu: %zu roads, %zu distinct, %.0f m distinct; first from %ld\n", seed, p.roads.size(), distinct.size(), len, w.skeleton->road(p.roads[0])->from);
   }
 }
 

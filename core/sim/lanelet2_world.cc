@@ -304,6 +304,7 @@ class Builder {
     out.skeleton = std::move(skeleton_);
     out.stats = stats_;
     out.split_twin = split_twin_;
+    out.joined = joined_;
     return out;
   }
 
@@ -682,7 +683,8 @@ class Builder {
       // The middle of the whole cross-section at every 2 m of the spine.
       const auto samples = resampleSpacing(centre, 2.0);
       std::vector<size_t> cands = comp.lanelets;
-      std::vector<Vector2d> mid;
+      std::vector<Vector2d> mid, normals;
+      std::vector<double> offsets;
       int fwd_max = 0, bwd_max = 0;
       for (size_t k = 0; k < samples.size(); ++k) {
         const Vector2d p = samples[k];
@@ -691,13 +693,29 @@ class Builder {
         double dl = 0.0, dr = 0.0;
         const auto ml = cast(vls_, cands, p, n, &dl);
         const auto mr = cast(vls_, cands, p, -n, &dr);
-        mid.push_back(p + n * 0.5 * (dl - dr));
+        offsets.push_back(0.5 * (dl - dr));
+        normals.push_back(n);
         std::set<size_t> met(ml.begin(), ml.end());
         met.insert(mr.begin(), mr.end());
         int f = 0, b = 0;
         for (size_t m : met) (project(vls_[m].centre, p).tangent.dot(t) > 0 ? f : b)++;
         fwd_max = std::max({fwd_max, f, 1});
         bwd_max = std::max(bwd_max, b);
+      }
+      // The offset of the middle from the spine, robustly smoothed (a cast that runs into a
+      // branching lane jumps): median of 7, then mean of 5.
+      std::vector<double> med(offsets.size());
+      for (size_t k = 0; k < offsets.size(); ++k) {
+        std::vector<double> win;
+        for (size_t q = k >= 3 ? k - 3 : 0; q < std::min(offsets.size(), k + 4); ++q) win.push_back(offsets[q]);
+        std::nth_element(win.begin(), win.begin() + win.size() / 2, win.end());
+        med[k] = win[win.size() / 2];
+      }
+      for (size_t k = 0; k < offsets.size(); ++k) {
+        double sum = 0.0;
+        int cnt = 0;
+        for (size_t q = k >= 2 ? k - 2 : 0; q < std::min(offsets.size(), k + 3); ++q, ++cnt) sum += med[q];
+        mid.push_back(samples[k] + normals[k] * (sum / cnt));
       }
       for (size_t m : comp.lanelets) {
         const Vector2d pm = resample(vls_[m].centre, 3)[1];
@@ -874,6 +892,7 @@ class Builder {
       }
       path_id[k] = next_id_++;
       ++stats_.joined_junction_paths;
+      for (size_t j : path) joined_[path_id[k]].push_back(vls_[j].ll.id);
     }
     for (size_t k = 0; k < paths.size(); ++k) {
       const auto& path = paths[k];
@@ -1140,6 +1159,7 @@ class Builder {
   osm::OsmData roads_;
   std::unique_ptr<skeleton::Skeleton> skeleton_;
   std::map<int64_t, int64_t> split_twin_;
+  std::map<int64_t, std::vector<int64_t>> joined_;
 };
 
 }  // namespace

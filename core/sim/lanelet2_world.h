@@ -62,6 +62,7 @@ struct Lanelet2World {
   std::unique_ptr<skeleton::Skeleton> skeleton;    // built from `roads` in the map's frame
   Lanelet2WorldStats stats;
   std::map<int64_t, int64_t> split_twin;           // two-way lanelet id -> its reverse half's id
+  std::map<int64_t, std::vector<int64_t>> joined;  // truth junction lanelet -> the drawn pieces
 };
 
 // The centre of a Lanelet2 file's node bounds (a default ENU origin); throws io::Lanelet2Error

@@ -2,6 +2,7 @@
 // and the Lanelet2 project's Karlsruhe example.
 #include "core/sim/lanelet2_world.h"
 
+#include "core/io/lanelet2.h"
 #include "core/sim/drive.h"
 #include "tests/common/sim_drive.h"
 
@@ -317,85 +318,67 @@ const sim::Lanelet2World& karlsruhe() {
   return *w;
 }
 
-TEST(Lanelet2World, KarlsruheStats) {
+TEST(Lanelet2World, KarlsruheTruthIsTheMapsVehicleLanelets) {
   const auto& w = karlsruhe();
-  const auto& s = w.stats;
-  std::printf("map %zu vehicle %zu split %zu road %zu junction %zu areas %zu roads %zu unassigned %zu joined %zu cross %zu stop %zu lines %zu curbs %zu; skeleton %zu roads %zu inters\n",
-              s.map_lanelets, s.map_vehicle_lanelets, s.two_way_split, s.road_lanelets, s.junction_lanelets,
-              s.junction_areas, s.roads, s.unassigned_lanelets, s.joined_junction_paths, s.crosswalks, s.stop_lines, s.painted_lines, s.curbs,
-              w.skeleton->roads().size(), w.skeleton->intersections().size());
-  // chains of junction lanelets
   const auto& t = w.world->truth();
-  size_t chains = 0, road_to_road = 0;
+  const auto file = io::readLanelet2File(lanemap::testing::dataPath("lanelet2/karlsruhe_mapping_example.osm"), 49.0, 8.4);
+  std::set<int64_t> drawn;
+  for (const auto& [id, subtype] : file.lanelet_subtype) {
+    if (subtype == "road" || subtype == "highway" || subtype == "bus_lane" || subtype == "play_street") drawn.insert(id);
+  }
+  EXPECT_EQ(w.stats.map_vehicle_lanelets, drawn.size());
+  EXPECT_GT(drawn.size(), 300u);
+  // Every drawn vehicle lanelet is in the truth: as itself, or as a piece of a joined junction
+  // lanelet; every truth lanelet is a drawn one, a reverse half or a joined one.
+  std::set<int64_t> covered, twins;
+  for (const auto& [id, twin] : w.split_twin) twins.insert(twin);
   for (const auto& l : t.lanelets) {
-    for (int64_t s2 : l.successors) {
-      const auto* n = t.lanelet(s2);
-      if (l.kind == map::LaneletKind::kIntersection && n->kind == map::LaneletKind::kIntersection) ++chains;
-      if (l.kind == map::LaneletKind::kRoad && n->kind == map::LaneletKind::kRoad && n->road_id != l.road_id) ++road_to_road;
+    if (drawn.count(l.id)) {
+      covered.insert(l.id);
+    } else if (w.joined.count(l.id)) {
+      covered.insert(w.joined.at(l.id).begin(), w.joined.at(l.id).end());
+    } else {
+      EXPECT_TRUE(twins.count(l.id)) << "truth lanelet " << l.id << " is not from the map";
     }
   }
-  std::printf("junction->junction %zu, road->other road %zu\n", chains, road_to_road);
+  std::vector<int64_t> missing, extra;
+  std::set_difference(drawn.begin(), drawn.end(), covered.begin(), covered.end(), std::back_inserter(missing));
+  std::set_difference(covered.begin(), covered.end(), drawn.begin(), drawn.end(), std::back_inserter(extra));
+  for (int64_t id : missing) ADD_FAILURE() << "drawn lanelet " << id << " is not in the truth";
+  for (int64_t id : extra) EXPECT_TRUE(twins.count(id)) << "joined piece " << id << " is not drawn nor a reverse half";
+  EXPECT_EQ(w.split_twin.size(), w.stats.two_way_split);
+  EXPECT_EQ(w.stats.road_lanelets + w.stats.junction_lanelets, t.lanelets.size());
+  // Labels in terms of the derived skeleton.
+  const auto& sk = *w.skeleton;
+  size_t on_way = 0, roads = 0, sampled_own = 0;
+  for (const auto& l : t.lanelets) {
+    if (l.kind == map::LaneletKind::kIntersection) {
+      EXPECT_NE(sk.intersection(l.intersection_id), nullptr) << "junction lanelet " << l.id;
+      continue;
+    }
+    ++roads;
+    const auto* r = sk.road(l.road_id);
+    ASSERT_NE(r, nullptr) << "road lanelet " << l.id << " has road_id " << l.road_id;
+    EXPECT_EQ(l.from_node, r->from);
+    EXPECT_EQ(l.to_node, r->to);
+    EXPECT_GE(l.index_from_left, 0);
+    const Eigen::Vector2d mid = l.centre[l.centre.size() / 2].head<2>();
+    on_way += sk.project(l.road_id, mid).distance < 12.0;
+    sampled_own += w.world->sample(mid.x(), mid.y()).lanelet == l.id;
+  }
+  EXPECT_GT(roads, 250u);
+  EXPECT_GE(on_way, roads * 95 / 100);        // the way runs along its lanelets
+  EXPECT_GE(sampled_own, roads * 90 / 100);   // sample() finds the lanelet at its own centre
+  // An auto drive goes over several roads.
   sim::DriveOptions o;
-  o.duration_s = 90;
-  const auto plan = sim::planDrive(*w.skeleton, t, o);
-  std::printf("plan roads %zu legs %zu\n", plan.roads.size(), plan.legs.size());
-  // Per road lanelet: what follows it.
-  size_t dead = 0, to_j = 0, to_r = 0, j_dead = 0;
-  for (const auto& l : t.lanelets) {
-    if (l.kind == map::LaneletKind::kRoad) {
-      if (l.successors.empty()) ++dead;
-      for (int64_t s2 : l.successors) (t.lanelet(s2)->kind == map::LaneletKind::kRoad ? to_r : to_j)++;
-    } else if (l.successors.empty()) {
-      ++j_dead;
-    }
-  }
-  std::printf("road lanelets without successor %zu, ->junction %zu, ->road %zu; junction without successor %zu\n", dead, to_j, to_r, j_dead);
-  size_t ok = 0, bad = 0;
-  for (const auto& l : t.lanelets) {
-    if (l.kind != map::LaneletKind::kRoad) continue;
-    for (int64_t s2 : l.successors) {
-      const auto* j = t.lanelet(s2);
-      if (j->kind != map::LaneletKind::kIntersection) continue;
-      for (int64_t s3 : j->successors) {
-        const auto* b = t.lanelet(s3);
-        const auto* ra = w.skeleton->road(l.road_id);
-        const auto* rb = w.skeleton->road(b->road_id);
-        if (ra && rb && ra->to == rb->from && j->intersection_id == ra->to) { ++ok; continue; }
-        ++bad;
-        if (bad < 10) std::printf("bad: %ld (road %ld %ld->%ld) -> J %ld (inter %ld) -> %ld (road %ld %ld->%ld)\n", l.id, l.road_id, l.from_node, l.to_node, j->id, j->intersection_id, b->id, b->road_id, b->from_node, b->to_node);
-      }
-    }
-  }
-  for (int64_t rid : {55L, 54L}) {
-    for (const auto& l : t.lanelets) {
-      if (l.road_id != rid && !(w.skeleton->road(rid) && l.road_id == w.skeleton->road(rid)->reverse_id)) continue;
-      std::printf("road %ld lanelet %ld idx %d: (%.0f,%.0f)->(%.0f,%.0f) succ %zu\n", l.road_id, l.id, l.index_from_left, l.centre.front().x(), l.centre.front().y(), l.centre.back().x(), l.centre.back().y(), l.successors.size());
-    }
-    for (const auto& in : w.skeleton->intersections()) if (in.id == w.skeleton->road(rid)->from || in.id == w.skeleton->road(rid)->to) std::printf("  inter %ld at (%.0f,%.0f)\n", in.id, in.centre.x(), in.centre.y());
-  }
-  for (const auto& in : w.skeleton->intersections()) if (in.id == 17 || in.id == 21) std::printf("  inter %ld at (%.0f,%.0f)\n", in.id, in.centre.x(), in.centre.y());
-  for (const auto& l : t.lanelets) {
-    if (!l.successors.empty()) continue;
-    const Eigen::Vector2d e = l.centre.back().head<2>();
-    double best = 1e9; int64_t bid = -1; double bs = 0;
-    for (const auto& m : t.lanelets) {
-      if (m.id == l.id) continue;
-      for (size_t i = 0; i < m.centre.size(); ++i) {
-        const double d = (m.centre[i].head<2>() - e).norm();
-        if (d < best) { best = d; bid = m.id; bs = static_cast<double>(i) / m.centre.size(); }
-      }
-    }
-    std::printf("nosucc %s %ld at (%.1f,%.1f): nearest centre %ld at %.1f m (frac %.2f)\n", l.kind == map::LaneletKind::kRoad ? "road" : "junc", l.id, e.x(), e.y(), bid, best, bs);
-  }
-  std::printf("road->J->road ok %zu bad %zu\n", ok, bad);
-  for (uint64_t seed = 1; seed <= 20; ++seed) {
-    o.seed = seed;
-    const auto p = sim::planDrive(*w.skeleton, t, o);
-    std::set<int64_t> distinct(p.roads.begin(), p.roads.end());
-    double len = 0;
-    for (int64_t r : distinct) len += w.skeleton->road(r)->length;
-    std::printf("seed %lu: %zu roads, %zu distinct, %.0f m distinct; first from %ld\n", seed, p.roads.size(), distinct.size(), len, w.skeleton->road(p.roads[0])->from);
-  }
+  o.duration_s = 60;
+  const auto plan = sim::planDrive(sk, t, o);
+  EXPECT_GE(std::set<int64_t>(plan.roads.begin(), plan.roads.end()).size(), 4u);
+  std::printf("Karlsruhe: %zu vehicle lanelets (%zu two-way, split), %zu road + %zu junction lanelets in the truth "
+              "(%zu joined from pieces), %zu junction areas, %zu ways, %zu atomic roads; on way %zu/%zu, sampled %zu/%zu\n",
+              drawn.size(), w.stats.two_way_split, w.stats.road_lanelets, w.stats.junction_lanelets,
+              w.stats.joined_junction_paths, w.stats.junction_areas, w.stats.roads, sk.roads().size(), on_way, roads,
+              sampled_own, roads);
 }
 
 }  // namespace

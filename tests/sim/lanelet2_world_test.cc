@@ -6,9 +6,13 @@
 #include "core/sim/drive.h"
 #include "tests/common/sim_drive.h"
 
+#include "core/osm/osm_data.h"
+
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
@@ -379,6 +383,76 @@ TEST(Lanelet2World, KarlsruheTruthIsTheMapsVehicleLanelets) {
               drawn.size(), w.stats.two_way_split, w.stats.road_lanelets, w.stats.junction_lanelets,
               w.stats.joined_junction_paths, w.stats.junction_areas, w.stats.roads, sk.roads().size(), on_way, roads,
               sampled_own, roads);
+}
+
+// lanemap-sim --lanelet2 end to end: a few seconds of a Karlsruhe drive. roads.osm read back gives
+// the skeleton the truth was labelled with (what lanemap-offline builds from it), and the
+// route's roads are its roads.
+TEST(Lanelet2WorldTool, KarlsruheDriveWritesAConsistentScenario) {
+  using lanemap::testing::binPath;
+  using lanemap::testing::runCommand;
+  lanemap::testing::TempDir dir("l2world-tool");
+  const auto r = runCommand(binPath("lanemap-sim") + " -q --lanelet2 " +
+                            lanemap::testing::dataPath("lanelet2/karlsruhe_mapping_example.osm") +
+                            " --origin 49,8.4 --no-lidar --camera-hz 1 --duration 4 --seed 1 --out " + dir.str("drive"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto roads = osm::readOsm(dir.str("drive/roads.osm"));
+  const auto sk = skeleton::Skeleton::build(roads);
+  const auto& w = karlsruhe();
+  ASSERT_EQ(sk.roads().size(), w.skeleton->roads().size());
+  for (size_t i = 0; i < sk.roads().size(); ++i) {
+    EXPECT_EQ(sk.roads()[i].from, w.skeleton->roads()[i].from);
+    EXPECT_EQ(sk.roads()[i].to, w.skeleton->roads()[i].to);
+    EXPECT_EQ(sk.roads()[i].way_id, w.skeleton->roads()[i].way_id);
+  }
+  const auto truth = io::readLanelet2(dir.str("drive/groundtruth.osm"), 49.0, 8.4);
+  EXPECT_EQ(truth.lanelets.size(), w.world->truth().lanelets.size());
+  std::ifstream in(dir.str("drive/scenario.json"));
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["lanelet2_world"]["map_vehicle_lanelets"].get<size_t>(), w.stats.map_vehicle_lanelets);
+  ASSERT_FALSE(j["route"].empty());
+  for (const auto& e : j["route"]) {
+    const auto* road = sk.road(e["road_id"].get<int64_t>());
+    ASSERT_NE(road, nullptr);
+    EXPECT_EQ(road->from, e["from"].get<int64_t>());
+    EXPECT_EQ(road->to, e["to"].get<int64_t>());
+  }
+  // The car was on a truth road lanelet of the first route road at the start.
+  std::ifstream csv(dir.str("drive/trajectory.csv"));
+  std::string header, first;
+  std::getline(csv, header);
+  std::getline(csv, first);
+  EXPECT_NE(first.rfind("," + std::to_string(j["route"][0]["road_id"].get<int64_t>())), std::string::npos) << first;
+}
+
+void expectLanelet2Failure(const std::string& args, const std::string& message_part) {
+  lanemap::testing::TempDir dir("l2world-bad");
+  const auto r = lanemap::testing::runCommand(lanemap::testing::binPath("lanemap-sim") + " -q --out " +
+                                              dir.str("out") + " " + args);
+  EXPECT_NE(r.exit_code, 0) << args;
+  EXPECT_NE(r.output.find(message_part), std::string::npos) << "for '" << args << "' got: " << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.str("out"))) << args;
+}
+
+TEST(Lanelet2WorldTool, BadInputIsRejectedClearly) {
+  const std::string map = lanemap::testing::dataPath("lanelet2/karlsruhe_mapping_example.osm");
+  expectLanelet2Failure("--lanelet2 /nonexistent/map.osm", "/nonexistent/map.osm");
+  expectLanelet2Failure("--lanelet2 " + map + " --origin 49", "--origin");
+  expectLanelet2Failure("--lanelet2 " + map + " --origin 149,8.4", "--origin");
+  expectLanelet2Failure("--osm " + lanemap::testing::dataPath("osm/west-oakland.osm") + " --origin 49,8.4", "--origin");
+  expectLanelet2Failure("--osm " + lanemap::testing::dataPath("osm/west-oakland.osm") + " --lanelet2 " + map, "excludes");
+  expectLanelet2Failure("", "--lanelet2");
+  // A Lanelet2 map without a vehicle lanelet.
+  lanemap::testing::TempDir dir("l2world-src");
+  std::ofstream(dir.str("walk.osm"))
+      << "<?xml version='1.0'?>\n<osm version='0.6'>\n"
+         "<node id='1' lat='49.0' lon='8.4'/><node id='2' lat='49.0001' lon='8.4'/>\n"
+         "<node id='3' lat='49.0' lon='8.40005'/><node id='4' lat='49.0001' lon='8.40005'/>\n"
+         "<way id='10'><nd ref='1'/><nd ref='2'/><tag k='type' v='curbstone'/></way>\n"
+         "<way id='11'><nd ref='3'/><nd ref='4'/><tag k='type' v='curbstone'/></way>\n"
+         "<relation id='20'><member type='way' ref='10' role='left'/><member type='way' ref='11' role='right'/>"
+         "<tag k='type' v='lanelet'/><tag k='subtype' v='walkway'/></relation>\n</osm>\n";
+  expectLanelet2Failure("--lanelet2 " + dir.str("walk.osm"), "no vehicle lanelet");
 }
 
 }  // namespace

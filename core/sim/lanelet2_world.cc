@@ -721,47 +721,71 @@ class Builder {
         const Vector2d pm = resample(vls_[m].centre, 3)[1];
         if (project(centre, pm).tangent.dot(project(vls_[m].centre, pm).tangent) < 0) bwd_max = std::max(bwd_max, 1);
       }
-      // Junction areas at the two ends.
+      // Junction areas along the road: where its lanelets lead into or come from junction
+      // lanelets. Those near an end end the way there (the closest at each end); those further in
+      // (a junction the road's other lanes pass by, e.g. an entry into a roundabout's ring) are
+      // junction nodes on the way, moved onto its middle line.
       const double L = length(centre);
-      std::map<int, double> at_start, at_end;  // area -> distance of its attachment from the end
+      const double end_zone = std::min(12.0, 0.3 * L);
+      std::map<int, Projection> attached;  // area -> its attachment nearest the spine
       for (size_t m : comp.lanelets) {
         auto attach = [&](size_t other, const Vector2d& where) {
           const int a = vls_[other].area;
           if (a < 0) return;
           const auto pr = project(centre, where);
-          if (pr.s < 0.5 * L) {
-            const double d = pr.s + pr.distance;
-            if (!at_start.count(a) || d < at_start[a]) at_start[a] = d;
-          } else {
-            const double d = L - pr.s + pr.distance;
-            if (!at_end.count(a) || d < at_end[a]) at_end[a] = d;
-          }
+          if (!attached.count(a) || pr.distance < attached[a].distance) attached[a] = pr;
         };
         for (size_t s : vls_[m].succ) attach(s, vls_[m].centre.back());
         for (size_t p : vls_[m].pred) attach(p, vls_[m].centre.front());
       }
-      auto closest = [](const std::map<int, double>& m) {
-        int best = -1;
-        double d = 1e300;
-        for (const auto& [a, dist] : m) {
-          if (dist < d) {
-            d = dist;
-            best = a;
+      int a0 = -1, a1 = -1;
+      double d0 = 1e300, d1 = 1e300;
+      std::vector<std::pair<double, int>> inner;  // (s, area)
+      for (const auto& [a, pr] : attached) {
+        if (pr.s < end_zone) {
+          if (pr.s + pr.distance < d0) {
+            d0 = pr.s + pr.distance;
+            a0 = a;
           }
+        } else if (pr.s > L - end_zone) {
+          if (L - pr.s + pr.distance < d1) {
+            d1 = L - pr.s + pr.distance;
+            a1 = a;
+          }
+        } else {
+          inner.emplace_back(pr.s, a);
         }
-        return best;
-      };
-      const int a0 = closest(at_start), a1 = closest(at_end);
+      }
+      std::sort(inner.begin(), inner.end());
       osm::Way w;
       w.id = way_id++;
-      const auto simple = simplify(mid, 0.2);
       if (a0 >= 0) w.nodes.push_back(areas_[a0].node);
-      for (const auto& p : simple) {
-        const int64_t id = next_osm_node_++;
-        addOsmNode(id, p);
-        w.nodes.push_back(id);
+      const double step = samples.size() > 1 ? L / static_cast<double>(samples.size() - 1) : L;
+      size_t k = 0;
+      auto run_until = [&](double s_stop) {  // the middle line's points before s_stop, simplified
+        std::vector<Vector2d> run;
+        for (; k < mid.size() && static_cast<double>(k) * step < s_stop; ++k) run.push_back(mid[k]);
+        for (const auto& p : simplify(run, 0.2)) {
+          const int64_t id = next_osm_node_++;
+          addOsmNode(id, p);
+          w.nodes.push_back(id);
+        }
+      };
+      for (const auto& [s_in, a] : inner) {
+        if (a == a0 || a == a1) continue;
+        run_until(s_in - 2.5);
+        while (k < mid.size() && static_cast<double>(k) * step < s_in + 2.5) ++k;
+        auto& area = areas_[a];
+        if (!area.pinned) {  // onto the middle line
+          area.pinned = true;
+          const size_t q = std::min(mid.size() - 1, static_cast<size_t>(std::lround(s_in / step)));
+          addOsmNode(area.node, mid[q]);
+        }
+        if (w.nodes.empty() || w.nodes.back() != area.node) w.nodes.push_back(area.node);
       }
+      run_until(1e300);
       if (a1 >= 0 && (a1 != a0 || w.nodes.size() > 2)) w.nodes.push_back(areas_[a1].node);
+      if (w.nodes.size() < 2) continue;
       const int lanes = fwd_max + bwd_max;
       w.tags["highway"] = std::max(fwd_max, bwd_max) >= 2 ? "secondary" : "residential";
       w.tags["lanes"] = std::to_string(std::max(1, lanes));
@@ -804,8 +828,8 @@ class Builder {
     for (const auto& in : sk.intersections()) {
       for (int64_t n : in.osm_nodes) inter_of_node[n] = in.id;
     }
-    std::map<std::pair<int64_t, bool>, int64_t> road_of;  // (way, along) -> road id
-    for (const auto& r : sk.roads()) road_of[{r.way_id, r.along_way}] = r.id;
+    std::map<std::pair<int64_t, bool>, std::vector<int64_t>> road_of;  // (way, along) -> road ids
+    for (const auto& r : sk.roads()) road_of[{r.way_id, r.along_way}].push_back(r.id);
     for (auto& v : vls_) {
       if (v.junction) continue;
       const auto& comp = comps_[v.comp];
@@ -813,7 +837,18 @@ class Builder {
       const bool along = comp.way_id >= 0 && project(comp.way_line, mid).tangent.dot(project(v.centre, mid).tangent) > 0;
       auto it = road_of.find({comp.way_id, along});
       if (it != road_of.end()) {
-        const auto* r = sk.road(it->second);
+        // The way's atomic road (a way with junction nodes along it has several) nearest the
+        // lanelet's middle.
+        int64_t best_road = it->second.front();
+        double best_d = 1e300;
+        for (int64_t rid : it->second) {
+          const double d = sk.project(rid, mid).distance;
+          if (d < best_d) {
+            best_d = d;
+            best_road = rid;
+          }
+        }
+        const auto* r = sk.road(best_road);
         v.ll.road_id = r->id;
         v.ll.from_node = r->from;
         v.ll.to_node = r->to;
@@ -1134,6 +1169,7 @@ class Builder {
     std::vector<size_t> lanelets;
     Vector2d centre = Vector2d::Zero();
     int64_t node = 0;
+    bool pinned = false;  // its node was moved onto a road's middle line
   };
   struct Comp {
     std::vector<size_t> lanelets;

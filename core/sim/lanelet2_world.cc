@@ -37,6 +37,7 @@ constexpr double kSuccessorGap = 0.2;     // bound ends this close: one lanelet 
 constexpr double kCastStep = 0.2;         // lateral casts (lane counts, road middle)
 constexpr double kCastGap = 0.6;          // a cast stops after this much off the lanes
 constexpr double kCastMax = 25.0;
+constexpr double kMinRoadLength = 8.0;    // shorter road stubs beside a junction belong to it
 
 // ---------- polylines ----------
 double length(const std::vector<Vector2d>& p) { return geom::polylineLength(p); }
@@ -757,6 +758,27 @@ class Builder {
         }
       }
       std::sort(inner.begin(), inner.end());
+      // A stub shorter than kMinRoadLength beside one junction (a short lane piece drawn at its
+      // edge) is part of that junction, not a road of its own; a short link between two
+      // junctions stays a road.
+      std::set<int> areas_met;
+      for (const auto& [a, pr] : attached) areas_met.insert(a);
+      if (L < kMinRoadLength && areas_met.size() == 1) {
+        int best = -1;
+        double bd = 1e300;
+        for (const auto& [a, pr] : attached) {
+          if (pr.distance < bd) {
+            bd = pr.distance;
+            best = a;
+          }
+        }
+        for (size_t m : comp.lanelets) {
+          vls_[m].junction = true;
+          vls_[m].area = best;
+        }
+        ++stats_.stubs_in_junctions;
+        continue;
+      }
       osm::Way w;
       w.id = way_id++;
       if (a0 >= 0) w.nodes.push_back(areas_[a0].node);

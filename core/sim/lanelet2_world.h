@@ -16,8 +16,10 @@
 //    junction node each, at the mean of its lanelets' centre lines.
 //  - roads: road lanelets joined by a shared bound or succession form one road; its OSM way runs
 //    along the middle of the road's whole cross-section (all lanes, both directions) from the
-//    junction node at one end to the one at the other (or a dead end), tagged highway, lanes,
-//    lanes:forward/backward or oneway=yes from the lanelets.
+//    junction node at one end to the one at the other (or a dead end), through the junction
+//    nodes of the junctions it passes (moved onto the way), tagged highway, lanes,
+//    lanes:forward/backward or oneway=yes from the lanelets. A road under 8 m beside one junction
+//    is part of the junction. Junction pieces drawn in a chain become one intersection lanelet.
 //  - the skeleton is built from that OSM as lanemap builds it from roads.osm; each road lanelet
 //    gets road_id/from_node/to_node (the atomic road of its way in its direction) and
 //    index_from_left (same-direction neighbours on its left), each junction lanelet
@@ -53,6 +55,7 @@ struct Lanelet2WorldStats {
   size_t roads = 0;               // OSM ways derived
   size_t unassigned_lanelets = 0; // road lanelets whose way the skeleton dropped (made junction)
   size_t joined_junction_paths = 0; // truth junction lanelets joined from several drawn pieces
+  size_t stubs_in_junctions = 0;  // roads under 8 m beside one junction, made part of it
   size_t crosswalks = 0, stop_lines = 0, painted_lines = 0, curbs = 0;
 };
 

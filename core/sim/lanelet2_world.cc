@@ -779,35 +779,85 @@ class Builder {
         ++stats_.stubs_in_junctions;
         continue;
       }
-      osm::Way w;
-      w.id = way_id++;
-      if (a0 >= 0) w.nodes.push_back(areas_[a0].node);
-      const double step = samples.size() > 1 ? L / static_cast<double>(samples.size() - 1) : L;
+      // Interior junctions move onto this road's middle line (the first road to pass one wins).
+      for (const auto& [s_in, a] : inner) {
+        if (a == a0 || a == a1) continue;
+        auto& area = areas_[a];
+        if (!area.pinned) {
+          area.pinned = true;
+          const double step = samples.size() > 1 ? L / static_cast<double>(samples.size() - 1) : L;
+          area.centre = mid[std::min(mid.size() - 1, static_cast<size_t>(std::lround(s_in / step)))];
+          addOsmNode(area.node, area.centre);
+        }
+      }
+      comp.way_line = centre;  // for the direction of each lanelet
+      comp.mid = std::move(mid);
+      comp.length = L;
+      comp.a0 = a0;
+      comp.a1 = a1;
+      comp.inner = std::move(inner);
+      comp.forward = fwd_max;
+      comp.backward = bwd_max;
+      comp.has_way = true;
+    }
+    // The ways, once every junction node has its place.
+    for (auto& comp : comps_) {
+      if (!comp.has_way) continue;
+      struct WayPoint {
+        int64_t node;  // -1: a new node
+        Vector2d p;
+      };
+      std::vector<WayPoint> pts;
+      const auto& mid = comp.mid;
+      const double step = mid.size() > 1 ? comp.length / static_cast<double>(mid.size() - 1) : comp.length;
       size_t k = 0;
       auto run_until = [&](double s_stop) {  // the middle line's points before s_stop, simplified
         std::vector<Vector2d> run;
         for (; k < mid.size() && static_cast<double>(k) * step < s_stop; ++k) run.push_back(mid[k]);
-        for (const auto& p : simplify(run, 0.2)) {
-          const int64_t id = next_osm_node_++;
-          addOsmNode(id, p);
-          w.nodes.push_back(id);
-        }
+        for (const auto& p : simplify(run, 0.2)) pts.push_back({-1, p});
       };
-      for (const auto& [s_in, a] : inner) {
-        if (a == a0 || a == a1) continue;
+      if (comp.a0 >= 0) pts.push_back({areas_[comp.a0].node, areas_[comp.a0].centre});
+      for (const auto& [s_in, a] : comp.inner) {
+        if (a == comp.a0 || a == comp.a1) continue;
         run_until(s_in - 2.5);
         while (k < mid.size() && static_cast<double>(k) * step < s_in + 2.5) ++k;
-        auto& area = areas_[a];
-        if (!area.pinned) {  // onto the middle line
-          area.pinned = true;
-          const size_t q = std::min(mid.size() - 1, static_cast<size_t>(std::lround(s_in / step)));
-          addOsmNode(area.node, mid[q]);
-        }
-        if (w.nodes.empty() || w.nodes.back() != area.node) w.nodes.push_back(area.node);
+        if (pts.empty() || pts.back().node != areas_[a].node) pts.push_back({areas_[a].node, areas_[a].centre});
       }
       run_until(1e300);
-      if (a1 >= 0 && (a1 != a0 || w.nodes.size() > 2)) w.nodes.push_back(areas_[a1].node);
+      if (comp.a1 >= 0 && (comp.a1 != comp.a0 || pts.size() > 2)) pts.push_back({areas_[comp.a1].node, areas_[comp.a1].centre});
+      // No fold-backs: drop middle-line points where the way would turn by more than 100 degrees
+      // (a junction node beside or behind the road's first lane points), and points closer than
+      // 0.5 m to the one before.
+      for (bool changed = true; changed;) {
+        changed = false;
+        for (size_t i = 1; i + 1 < pts.size() && !changed; ++i) {
+          const Vector2d u = pts[i].p - pts[i - 1].p, v = pts[i + 1].p - pts[i].p;
+          const bool close = u.norm() < 0.5;
+          const bool fold = !close && v.norm() > 1e-6 && u.normalized().dot(v.normalized()) < std::cos(100.0 * kPi / 180.0);
+          if (!close && !fold) continue;
+          size_t drop = SIZE_MAX;
+          if (pts[i].node < 0) drop = i;
+          else if (close && pts[i - 1].node < 0 && i - 1 > 0) drop = i - 1;
+          else if (fold && pts[i - 1].node < 0 && i - 1 > 0) drop = i - 1;
+          else if (fold && pts[i + 1].node < 0 && i + 1 < pts.size() - 1) drop = i + 1;
+          if (drop != SIZE_MAX) {
+            pts.erase(pts.begin() + static_cast<std::ptrdiff_t>(drop));
+            changed = true;
+          }
+        }
+      }
+      osm::Way w;
+      w.id = way_id++;
+      for (const auto& q : pts) {
+        int64_t id = q.node;
+        if (id < 0) {
+          id = next_osm_node_++;
+          addOsmNode(id, q.p);
+        }
+        if (w.nodes.empty() || w.nodes.back() != id) w.nodes.push_back(id);
+      }
       if (w.nodes.size() < 2) continue;
+      const int fwd_max = comp.forward, bwd_max = comp.backward;
       const int lanes = fwd_max + bwd_max;
       w.tags["highway"] = std::max(fwd_max, bwd_max) >= 2 ? "secondary" : "residential";
       w.tags["lanes"] = std::to_string(std::max(1, lanes));
@@ -819,7 +869,6 @@ class Builder {
       }
       w.tags["lanemap:source"] = "lanelet2";
       comp.way_id = w.id;
-      comp.way_line = centre;  // for the direction of each lanelet
       roads_.ways.push_back(std::move(w));
       ++stats_.roads;
     }
@@ -1196,7 +1245,13 @@ class Builder {
   struct Comp {
     std::vector<size_t> lanelets;
     int64_t way_id = -1;
-    std::vector<Vector2d> way_line;
+    std::vector<Vector2d> way_line;   // the spine (lanelet centre lines), in its direction
+    std::vector<Vector2d> mid;        // the cross-section's middle, every ~2 m of the spine
+    double length = 0.0;
+    int a0 = -1, a1 = -1;             // junction areas at the start and the end
+    std::vector<std::pair<double, int>> inner;  // (s, area) of the junctions it passes
+    int forward = 1, backward = 0;
+    bool has_way = false;
   };
 
   std::string path_;

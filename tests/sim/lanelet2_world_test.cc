@@ -371,6 +371,14 @@ TEST(Lanelet2World, KarlsruheTruthIsTheMapsVehicleLanelets) {
     sampled_own += w.world->sample(mid.x(), mid.y()).lanelet == l.id;
   }
   EXPECT_GT(roads, 250u);
+  // The derived ways do not fold back on themselves (a junction node placed behind a road's end).
+  for (const auto& r : sk.roads()) {
+    for (size_t i = 1; i + 1 < r.polyline.size(); ++i) {
+      const Eigen::Vector2d u = r.polyline[i] - r.polyline[i - 1], v = r.polyline[i + 1] - r.polyline[i];
+      if (u.norm() < 1e-6 || v.norm() < 1e-6) continue;
+      EXPECT_GT(u.normalized().dot(v.normalized()), std::cos(100.0 * kPi / 180.0)) << "road " << r.id << " point " << i;
+    }
+  }
   EXPECT_GE(on_way, roads * 95 / 100);        // the way runs along its lanelets
   EXPECT_GE(sampled_own, roads * 90 / 100);   // sample() finds the lanelet at its own centre
   // An auto drive goes over several roads.

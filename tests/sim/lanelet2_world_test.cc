@@ -381,6 +381,26 @@ TEST(Lanelet2World, KarlsruheTruthIsTheMapsVehicleLanelets) {
   }
   EXPECT_GE(on_way, roads * 95 / 100);        // the way runs along its lanelets
   EXPECT_GE(sampled_own, roads * 90 / 100);   // sample() finds the lanelet at its own centre
+  // Junction connections: road -> intersection lanelet -> road, in the skeleton from the first
+  // road's end intersection (the one the intersection lanelet names) to the next road's start.
+  size_t joins = 0, consistent = 0;
+  for (const auto& l : t.lanelets) {
+    if (l.kind != map::LaneletKind::kRoad) continue;
+    for (int64_t s1 : l.successors) {
+      const auto* j = t.lanelet(s1);
+      if (!j || j->kind != map::LaneletKind::kIntersection) continue;
+      for (int64_t s2 : j->successors) {
+        const auto* n = t.lanelet(s2);
+        if (!n || n->road_id == l.road_id) continue;
+        ++joins;
+        const auto* ra = sk.road(l.road_id);
+        const auto* rb = sk.road(n->road_id);
+        consistent += ra && rb && ra->to == rb->from && j->intersection_id == ra->to;
+      }
+    }
+  }
+  EXPECT_GT(joins, 50u);
+  EXPECT_GE(consistent, joins * 90 / 100);
   // An auto drive goes over several roads.
   sim::DriveOptions o;
   o.duration_s = 60;
@@ -394,10 +414,10 @@ TEST(Lanelet2World, KarlsruheTruthIsTheMapsVehicleLanelets) {
   }
   EXPECT_GE(most, 5u);
   std::printf("Karlsruhe: %zu vehicle lanelets (%zu two-way, split), %zu road + %zu junction lanelets in the truth "
-              "(%zu joined from pieces), %zu junction areas, %zu ways (%zu stubs in junctions), %zu atomic roads; on way %zu/%zu, sampled %zu/%zu\n",
+              "(%zu joined from pieces), %zu junction areas, %zu ways (%zu stubs in junctions), %zu atomic roads; on way %zu/%zu, sampled %zu/%zu; junction connections consistent %zu/%zu\n",
               drawn.size(), w.stats.two_way_split, w.stats.road_lanelets, w.stats.junction_lanelets,
               w.stats.joined_junction_paths, w.stats.junction_areas, w.stats.roads, w.stats.stubs_in_junctions, sk.roads().size(), on_way, roads,
-              sampled_own, roads);
+              sampled_own, roads, consistent, joins);
 }
 
 // lanemap-sim --lanelet2 end to end: a few seconds of a Karlsruhe drive. roads.osm read back gives

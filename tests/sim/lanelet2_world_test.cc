@@ -4,6 +4,7 @@
 
 #include "core/io/lanelet2.h"
 #include "core/sim/drive.h"
+#include "core/sim/world_builder.h"
 #include "tests/common/sim_drive.h"
 
 #include "core/osm/osm_data.h"
@@ -418,6 +419,46 @@ TEST(Lanelet2World, KarlsruheTruthIsTheMapsVehicleLanelets) {
               drawn.size(), w.stats.two_way_split, w.stats.road_lanelets, w.stats.junction_lanelets,
               w.stats.joined_junction_paths, w.stats.junction_areas, w.stats.roads, w.stats.stubs_in_junctions, sk.roads().size(), on_way, roads,
               sampled_own, roads, consistent, joins);
+}
+
+// The round trip: the OSM world's own truth (West Oakland), written as Lanelet2 and read back as a
+// world, gives back the street network it was laid out from: its junctions where the OSM's are,
+// about as many atomic roads, the road lanelets as road lanelets.
+TEST(Lanelet2World, OwnTruthGivesBackTheStreetNetwork) {
+  const auto osm_data = osm::readOsm(lanemap::testing::dataPath("osm/west-oakland.osm"));
+  const auto sk = skeleton::Skeleton::build(osm_data);
+  sim::WorldOptions o;
+  o.seed = 1;
+  const auto world = sim::buildWorld(sk, o);
+  lanemap::testing::TempDir dir("l2world-roundtrip");
+  io::writeLanelet2(world->truth(), dir.str("truth.osm"));
+  const auto l2 = sim::buildLanelet2World(dir.str("truth.osm"), sk.frame().origin(), sim::WorldOptions{});
+  const auto& dsk = *l2.skeleton;
+  size_t junctions = 0, found = 0;
+  for (const auto& in : sk.intersections()) {
+    if (in.dead_end || in.incoming.size() + in.outgoing.size() < 3) continue;
+    ++junctions;
+    double best = 1e9;
+    for (const auto& d : dsk.intersections()) {
+      if (!d.dead_end) best = std::min(best, (d.centre - in.centre).norm());
+    }
+    found += best < 15.0;
+    if (best >= 15.0) std::printf("  junction %ld at (%.0f,%.0f), %zu roads: nearest derived %.1f m\n", in.id, in.centre.x(), in.centre.y(), in.incoming.size() + in.outgoing.size(), best);
+  }
+  const size_t roads = sk.roads().size(), droads = dsk.roads().size();
+  size_t road_lanelets = 0, kept_road = 0;
+  for (const auto& l : world->truth().lanelets) {
+    if (l.kind != map::LaneletKind::kRoad) continue;
+    ++road_lanelets;
+    const auto* d = l2.world->truth().lanelet(l.id);
+    kept_road += d && d->kind == map::LaneletKind::kRoad;
+  }
+  std::printf("West Oakland round trip: junctions %zu/%zu found, atomic roads %zu (OSM %zu), road lanelets kept %zu/%zu\n",
+              found, junctions, droads, roads, kept_road, road_lanelets);
+  EXPECT_GT(junctions, 10u);
+  EXPECT_GE(found, junctions * 85 / 100);  // 14 of 16
+  EXPECT_LE(std::abs(static_cast<long>(droads) - static_cast<long>(roads)), static_cast<long>(roads / 10));
+  EXPECT_GE(kept_road, road_lanelets * 90 / 100);
 }
 
 // lanemap-sim --lanelet2 end to end: a few seconds of a Karlsruhe drive. roads.osm read back gives

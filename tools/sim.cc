@@ -327,6 +327,7 @@ int main(int argc, char** argv) {
                                     {"two_way_split", st.two_way_split}, {"road_lanelets", st.road_lanelets},
                                     {"junction_lanelets", st.junction_lanelets}, {"junction_areas", st.junction_areas},
                                     {"joined_junction_paths", st.joined_junction_paths}, {"roads", st.roads},
+                                    {"stubs_in_junctions", st.stubs_in_junctions},
                                     {"crosswalks", st.crosswalks}, {"stop_lines", st.stop_lines}};
     }
     scenario["seed"] = seed;

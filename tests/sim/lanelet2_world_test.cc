@@ -30,7 +30,8 @@ constexpr double kPi = 3.14159265358979323846;
 //  - a junction at x 60..80 where each lane branches in two: the left lane straight on (J3) or
 //    left to the north (J4), the right lane straight on (J1) or right to the south (J2);
 //  - the east road: two lanelets x 80..140 with a crosswalk lanelet across it at x 100..104;
-//  - the north road: one lanelet x 75..78.5 driving north; the south road: one two-way lanelet
+//  - the north road: one lanelet x 75..78.5 driving north (curb on its left, a solid line on its
+//    right); the south road: one two-way lanelet
 //    (one_way=no) x 71.5..75 drawn driving south.
 struct HandMap {
   std::map<std::string, int64_t> lanelet;  // name -> relation id
@@ -115,7 +116,7 @@ HandMap handMap() {
   lanelet("crosswalk", cw_left, cw_right, "crosswalk", "no");
   // North road (one way) and south road (one two-way lanelet, drawn driving south).
   const int64_t nl = way(line(75, 18.5, 75, 48.5), "curbstone", "high");
-  const int64_t nr = way(line(78.5, 18.5, 78.5, 48.5), "curbstone", "high");
+  const int64_t nr = way(line(78.5, 18.5, 78.5, 48.5), "line_thin", "solid");
   lanelet("north", nl, nr, "road", "yes");
   const int64_t sl = way(line(75, -15, 75, -45), "curbstone", "high");
   const int64_t sr = way(line(71.5, -15, 71.5, -45), "curbstone", "high");
@@ -269,6 +270,11 @@ TEST(Lanelet2World, SampleGivesThePaintCurbsAndLaneletsAsDrawn) {
   EXPECT_EQ(w.sample(30, -3.57).surface, sim::Surface::kCurb);
   EXPECT_EQ(w.sample(30, 4.8).surface, sim::Surface::kSidewalk);
   EXPECT_EQ(w.sample(30, 8.0).surface, sim::Surface::kOffRoad);
+  // The north road: a solid line on its right, the curb on its left (outside the lane: x < 75).
+  EXPECT_EQ(w.sample(78.5, 30).surface, sim::Surface::kSolidPaint);
+  EXPECT_EQ(w.sample(76.75, 30).surface, sim::Surface::kAsphalt);
+  EXPECT_EQ(w.sample(74.93, 30).surface, sim::Surface::kCurb);
+  EXPECT_EQ(w.sample(74.5, 30).surface, sim::Surface::kSidewalk);
   // The stop line and the crosswalk's stripes.
   EXPECT_EQ(w.sample(59.0, 1.0).surface, sim::Surface::kStopLinePaint);
   EXPECT_EQ(w.sample(102.0, -3.0).surface, sim::Surface::kCrosswalkPaint);

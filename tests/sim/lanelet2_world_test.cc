@@ -499,6 +499,15 @@ TEST(Lanelet2WorldTool, KarlsruheDriveWritesAConsistentScenario) {
     EXPECT_EQ(road->from, e["from"].get<int64_t>());
     EXPECT_EQ(road->to, e["to"].get<int64_t>());
   }
+  // Deterministic: the same map, seed and options give the same files.
+  const auto again = runCommand(binPath("lanemap-sim") + " -q --lanelet2 " +
+                                lanemap::testing::dataPath("lanelet2/karlsruhe_mapping_example.osm") +
+                                " --origin 49,8.4 --no-lidar --camera-hz 1 --duration 4 --seed 1 --out " + dir.str("again"));
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  for (const char* f : {"roads.osm", "groundtruth.osm", "trajectory.csv", "drive.lcmlog"}) {
+    const auto c = runCommand("cmp " + dir.str("drive/") + f + " " + dir.str("again/") + f);
+    EXPECT_EQ(c.exit_code, 0) << f << ": " << c.output;
+  }
   // The car was on a truth road lanelet of the first route road at the start.
   std::ifstream csv(dir.str("drive/trajectory.csv"));
   std::string header, first;

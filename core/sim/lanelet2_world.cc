@@ -800,6 +800,33 @@ class Builder {
       comp.backward = bwd_max;
       comp.has_way = true;
     }
+    // A junction that a one-way carriageway runs through (it ends one road and begins the next
+    // going on in nearly the same direction, e.g. a roundabout's ring past an entry): its node
+    // goes onto the carriageway, between the two roads, as OSM draws it (and as OSM's, a small
+    // roundabout's nodes are then close enough for the skeleton to make it one intersection).
+    for (size_t a = 0; a < areas_.size(); ++a) {
+      auto& area = areas_[a];
+      if (area.pinned) continue;
+      int pairs = 0;
+      Vector2d at = Vector2d::Zero();
+      for (const auto& x : comps_) {
+        if (!x.has_way || x.a1 != static_cast<int>(a) || x.backward > 0 || x.way_line.size() < 2) continue;
+        for (const auto& y : comps_) {
+          if (&x == &y || !y.has_way || y.a0 != static_cast<int>(a) || y.backward > 0 || y.way_line.size() < 2) continue;
+          const Vector2d tx = (x.way_line.back() - x.way_line[x.way_line.size() - 2]).normalized();
+          const Vector2d ty = (y.way_line[1] - y.way_line.front()).normalized();
+          const Vector2d gap = y.mid.front() - x.mid.back();
+          if (tx.dot(ty) < std::cos(100.0 * kPi / 180.0) || gap.norm() > 40.0) continue;
+          ++pairs;
+          at = 0.5 * (x.mid.back() + y.mid.front());
+        }
+      }
+      if (pairs != 1) continue;
+      area.pinned = true;
+      area.centre = at;
+      addOsmNode(area.node, at);
+      ++stats_.through_junctions;
+    }
     // The ways, once every junction node has its place.
     for (auto& comp : comps_) {
       if (!comp.has_way) continue;

@@ -56,6 +56,7 @@ struct Lanelet2WorldStats {
   size_t unassigned_lanelets = 0; // road lanelets whose way the skeleton dropped (made junction)
   size_t joined_junction_paths = 0; // truth junction lanelets joined from several drawn pieces
   size_t stubs_in_junctions = 0;  // roads under 8 m beside one junction, made part of it
+  size_t through_junctions = 0;   // junction nodes put onto a one-way carriageway running through
   size_t crosswalks = 0, stop_lines = 0, painted_lines = 0, curbs = 0;
 };
 

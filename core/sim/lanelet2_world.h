@@ -12,8 +12,10 @@
 //  - junction lanelets: vehicle lanelets whose centre line runs inside another vehicle lanelet
 //    that is neither a lateral neighbour (shared bound) nor a successor/predecessor: crossing,
 //    branching and merging movements. The rest are road lanelets.
-//  - junction areas: junction lanelets joined by overlap, succession or a shared bound; one OSM
-//    junction node each, at the mean of its lanelets' centre lines.
+//  - junction areas: junction lanelets joined by overlap, succession, a shared bound or a shared
+//    predecessor/successor; one OSM junction node each, at the mean of its lanelets' centre lines,
+//    or on a road's middle line where the road passes the junction, or on a one-way carriageway
+//    that runs through it (a roundabout's ring at an entry), as OSM draws it.
 //  - roads: road lanelets joined by a shared bound or succession form one road; its OSM way runs
 //    along the middle of the road's whole cross-section (all lanes, both directions) from the
 //    junction node at one end to the one at the other (or a dead end), through the junction

@@ -1,4 +1,5 @@
-// lanemap-sim: simulates a data-collection drive over a street network from an OSM file and writes
+// lanemap-sim: simulates a data-collection drive over a street network from an OSM file (or, with
+// --lanelet2, over the lanes of a Lanelet2 HD map someone drew: core/sim/lanelet2_world.h) and writes
 //   <out>/drive.lcmlog      CAMERA_FRONT (JPEG), SEMANTIC_FRONT_TRUTH, LIDAR_PACKETS, POSE
 //   <out>/groundtruth.osm   the true lane-level map (Lanelet2)
 //   <out>/groundtruth.png   a picture of it over the street network
@@ -14,6 +15,7 @@
 #include "core/io/road_osm_writer.h"
 #include "core/osm/osm_data.h"
 #include "core/sim/drive.h"
+#include "core/sim/lanelet2_world.h"
 #include "core/sim/simulator.h"
 #include "core/sim/world_builder.h"
 #include "core/skeleton/skeleton.h"
@@ -130,15 +132,24 @@ int main(int argc, char** argv) {
   CLI::App app(
       "lanemap-sim: simulate a data-collection drive over the street network of an OSM file.\n"
       "Writes drive.lcmlog, groundtruth.osm (Lanelet2), groundtruth.png, roads.osm, trajectory.csv\n"
-      "and scenario.json into --out. Deterministic for a seed.");
-  std::string osm_path, out_dir, route_text = "auto";
+      "and scenario.json into --out. Deterministic for a seed.\n"
+      "With --lanelet2 MAP.osm the world is the HD map's own lanes, markings, curbs, crosswalks and\n"
+      "junctions, the ground truth its vehicle lanelets, and roads.osm a road-level OSM derived from\n"
+      "the lanelets (ways along groups of side-by-side lanelets, junction nodes where they branch).");
+  std::string osm_path, lanelet2_path, origin_text, out_dir, route_text = "auto";
   std::string vehicle_path = std::string(LANEMAP_SOURCE_DIR) + "/config/vehicle.yaml";
   std::string world_path = std::string(LANEMAP_SOURCE_DIR) + "/config/sim_world.yaml";
   std::string drive_path = std::string(LANEMAP_SOURCE_DIR) + "/config/sim_drive.yaml";
   uint64_t seed = 1;
   double duration = 120.0, camera_hz = 10.0, pose_hz = 100.0;
   bool no_lidar = false, flat = false, keep_lane_tags = false, force = false, quiet = false;
-  app.add_option("--osm", osm_path, "road network (.osm or .osm.pbf)")->required();
+  auto* osm_opt = app.add_option("--osm", osm_path, "road network (.osm or .osm.pbf)");
+  auto* l2_opt = app.add_option("--lanelet2", lanelet2_path,
+                                "a Lanelet2 HD map (.osm) to build the world from, instead of --osm");
+  app.add_option("--origin", origin_text,
+                 "with --lanelet2: LAT,LON of the map's ENU origin (default: the centre of its nodes)");
+  osm_opt->excludes(l2_opt);
+  l2_opt->excludes(osm_opt);
   app.add_option("--out", out_dir, "output folder (must not exist or be empty, unless --force)")->required();
   app.add_option("--route", route_text, "auto, or intersection node ids to pass through: id,id,...");
   app.add_option("--seed", seed, "random seed: world irregularities, route, noise");
@@ -154,6 +165,15 @@ int main(int argc, char** argv) {
   app.add_flag("--force", force, "replace a non-empty --out");
   app.add_flag("-q,--quiet", quiet, "no progress");
   CLI11_PARSE(app, argc, argv);
+
+  if (osm_path.empty() && lanelet2_path.empty()) {
+    std::fprintf(stderr, "lanemap-sim: error: give --osm FILE or --lanelet2 FILE (see --help)\n");
+    return 2;
+  }
+  if (!origin_text.empty() && lanelet2_path.empty()) {
+    std::fprintf(stderr, "lanemap-sim: error: --origin goes with --lanelet2\n");
+    return 2;
+  }
 
   const auto t_start = std::chrono::steady_clock::now();
   fs::path out(out_dir);
@@ -172,9 +192,35 @@ int main(int argc, char** argv) {
     world_options.seed = seed;
     if (flat) world_options.flat = true;
 
-    const osm::OsmData osm_data = osm::readOsm(osm_path);
-    const skeleton::Skeleton sk = skeleton::Skeleton::build(osm_data);
-    const auto world = sim::buildWorld(sk, world_options);
+    osm::OsmData osm_data;
+    std::unique_ptr<skeleton::Skeleton> sk_ptr;
+    std::unique_ptr<sim::SimWorld> world;
+    std::optional<sim::Lanelet2WorldStats> l2_stats;
+    if (!lanelet2_path.empty()) {
+      geo::LatLonAlt origin;
+      if (origin_text.empty()) {
+        origin = sim::lanelet2MapCentre(lanelet2_path);
+      } else {
+        double lat = 0, lon = 0;
+        char extra = 0;
+        if (std::sscanf(origin_text.c_str(), "%lf,%lf%c", &lat, &lon, &extra) != 2 || !(std::abs(lat) <= 90.0) ||
+            !(std::abs(lon) <= 180.0)) {
+          throw std::runtime_error("--origin: '" + origin_text + "' is not LAT,LON in degrees (e.g. 49,8.4)");
+        }
+        origin.lat = lat;
+        origin.lon = lon;
+      }
+      sim::Lanelet2World l2 = sim::buildLanelet2World(lanelet2_path, origin, world_options);
+      osm_data = std::move(l2.roads);
+      sk_ptr = std::move(l2.skeleton);
+      world = std::move(l2.world);
+      l2_stats = l2.stats;
+    } else {
+      osm_data = osm::readOsm(osm_path);
+      sk_ptr = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(osm_data));
+      world = sim::buildWorld(*sk_ptr, world_options);
+    }
+    const skeleton::Skeleton& sk = *sk_ptr;
     const YAML::Node drive_config = loadYamlFile(drive_path);
     sim::DriveOptions drive = sim::DriveOptions::fromYaml(drive_config["drive"]);
     drive.seed = seed;
@@ -273,13 +319,23 @@ int main(int argc, char** argv) {
     }
 
     nlohmann::json scenario;
-    scenario["osm"] = fs::absolute(osm_path).string();
+    scenario["osm"] = lanelet2_path.empty() ? fs::absolute(osm_path).string() : (fs::absolute(out) / "roads.osm").string();
+    if (!lanelet2_path.empty()) {
+      const auto& st = *l2_stats;
+      scenario["lanelet2"] = fs::absolute(lanelet2_path).string();
+      scenario["lanelet2_world"] = {{"map_lanelets", st.map_lanelets}, {"map_vehicle_lanelets", st.map_vehicle_lanelets},
+                                    {"two_way_split", st.two_way_split}, {"road_lanelets", st.road_lanelets},
+                                    {"junction_lanelets", st.junction_lanelets}, {"junction_areas", st.junction_areas},
+                                    {"joined_junction_paths", st.joined_junction_paths}, {"roads", st.roads},
+                                    {"stubs_in_junctions", st.stubs_in_junctions},
+                                    {"crosswalks", st.crosswalks}, {"stop_lines", st.stop_lines}};
+    }
     scenario["seed"] = seed;
     scenario["start_utime"] = sim_options.start_utime;
     scenario["duration_s"] = trajectory.duration();
     scenario["length_m"] = trajectory.length();
     scenario["options"] = {{"route", route_text}, {"camera_hz", camera_hz}, {"pose_hz", pose_hz},
-                           {"lidar", !no_lidar}, {"flat", world_options.flat},
+                           {"lidar", !no_lidar}, {"flat", world->options().flat},
                            {"keep_lane_tags", keep_lane_tags}, {"vehicle", fs::absolute(vehicle_path).string()}};
     scenario["origin"] = {{"lat", sk.frame().origin().lat}, {"lon", sk.frame().origin().lon},
                           {"alt", sk.frame().origin().alt}};

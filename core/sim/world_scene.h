@@ -1,7 +1,8 @@
 // Inside of SimWorld (world_builder.h): the scene the builder produces (filled polygons per
 // surface layer, road-surface quads for the height profile, obstacles, lane slots for laneOffset)
 // and the lazily rasterised tiles behind sample() and height(), held in a bounded cache.
-// Only world_builder.cc and world_scene.cc include this.
+// Only world_builder.cc, world_scene.cc and lanelet2_world.cc (the world from a Lanelet2 map)
+// include this.
 #pragma once
 
 #include "core/sim/world_builder.h"

@@ -12,7 +12,9 @@
 #   SEEDS="1 2"       seeds per network (default "1 2")
 #   SECONDS_PER=150   drive length (s); the issue asks for at least 150
 #   LABELS="oracle model"   which label sources to map on
-#   NETWORKS="..."    a subset of OSM files (paths relative to data/osm), default all
+#   NETWORKS="..."    a subset of OSM files (paths relative to data/osm), default all; an entry
+#                     lanelet2:FILE is a world built from the Lanelet2 map data/lanelet2/FILE
+#                     (lanemap-sim --lanelet2: the drawn lanes are the truth, roads.osm derived)
 #   LIDAR=1           BEV on the LIDAR ground mesh (0: --no-lidar, flat plane; faster)
 #   JOBS=$(nproc)     drives simulated and mapped at once
 # Drives already simulated in OUT_DIR are reused (they do not depend on the mapping stages: after a
@@ -33,6 +35,7 @@ lidar=${LIDAR:-1}
 root=$(cd "$(dirname "$0")/../.." && pwd)
 if [ -z "${NETWORKS:-}" ]; then
   NETWORKS="west-oakland.osm monaco.osm.pbf $(cd "$root/data/osm" && ls dev/*.osm | tr '\n' ' ')"
+  NETWORKS+=" lanelet2:karlsruhe_mapping_example.osm"
 fi
 sim_flags=()
 map_flags=()
@@ -40,13 +43,16 @@ if [ "$lidar" = 0 ]; then sim_flags+=(--no-lidar); map_flags+=(--no-lidar); fi
 
 # One drive: simulate (unless already there), map on each label source, score.
 run_one() {
-  local osm=$1 seed=$2 name d
-  name=$(basename "${osm%%.*}")-s$seed
+  local osm=$1 seed=$2 name d src
+  src=(--osm "$root/data/osm/$osm")
+  case $osm in lanelet2:*) src=(--lanelet2 "$root/data/lanelet2/${osm#lanelet2:}") ;; esac
+  name=$(basename "${osm#lanelet2:}")
+  name=${name%%.*}-s$seed
   d="$out/$name"
   mkdir -p "$d"
   if [ ! -f "$d/drive/scenario.json" ]; then
     rm -rf "$d/drive"
-    if ! "$bin/lanemap-sim" -q --osm "$root/data/osm/$osm" --out "$d/drive" --seed "$seed" --duration "$secs" \
+    if ! "$bin/lanemap-sim" -q "${src[@]}" --out "$d/drive" --seed "$seed" --duration "$secs" \
       "${sim_flags[@]}" >"$d/sim.log" 2>&1; then
       echo "   $name: simulation failed (see $d/sim.log)"
       return 0

@@ -13,6 +13,12 @@
 // --oracle takes the simulator's SEMANTIC_FRONT_TRUTH instead, --semantic-channel any label
 // channel already in the log (SEMANTIC_FRONT of a log lanemap-segmenter --log-out wrote).
 //
+// Config: the same files and readers as the live processes (processes/framework/process_configs.h):
+// --lanes-config (config/lane_mapper.yaml) gives the explorer options and names the map block
+// (`map:`, config/map.yaml: skeleton options, origin) and the intersections block
+// (`intersections:`, config/intersections.yaml), as the lane mapper reads them; --tracker-config
+// and --bev-config are the road tracker's and the BEV builder's files. --osm is required here.
+//
 // One road's trouble never costs the map: a road whose exploration fails is named on stderr and in
 // summary.json (roads_failed, with the reason), and every other road is still mapped.
 #include "core/bev/bev_builder.h"
@@ -37,6 +43,7 @@
 #include "processes/framework/channels.h"
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -66,9 +73,27 @@ struct Options {
   std::string bev_config = std::string(LANEMAP_SOURCE_DIR) + "/config/bev_builder.yaml";
   std::string lanes_config = std::string(LANEMAP_SOURCE_DIR) + "/config/lane_mapper.yaml";
   std::string tracker_config = std::string(LANEMAP_SOURCE_DIR) + "/config/road_tracker.yaml";
-  std::string intersections_config = std::string(LANEMAP_SOURCE_DIR) + "/config/intersections.yaml";
+  std::string intersections_config;  // "": the lanes config's `intersections:` (as the lane mapper)
+  std::string map_config;            // "": the lanes config's `map:` (as the lane mapper)
   bool no_lidar = false, quiet = false;
 };
+
+// What the live processes read from the same files, through the same functions
+// (processes/framework/process_configs.h): the skeleton and intersections exactly as the lane
+// mapper builds them, the tracker's and the BEV builder's options as theirs.
+struct OfflineConfig {
+  LaneMapperSettings lanes;
+  RoadTrackerSettings tracker;
+  BevBuilderSettings bev;
+};
+
+OfflineConfig loadConfig(const Options& o) {
+  OfflineConfig c{LaneMapperSettings::fromYamlFile(o.lanes_config), RoadTrackerSettings::fromYamlFile(o.tracker_config),
+                  BevBuilderSettings::fromYamlFile(o.bev_config)};
+  if (!o.map_config.empty()) c.lanes.map = config::MapConfig::fromYamlFile(o.map_config);
+  if (!o.intersections_config.empty()) c.lanes.intersections = intersectionsFromFile(o.intersections_config);
+  return c;
+}
 
 template <typename T>
 bool decode(const lcm::LogEvent& ev, T& msg) {
@@ -77,12 +102,12 @@ bool decode(const lcm::LogEvent& ev, T& msg) {
 
 class OfflineMapper {
  public:
-  OfflineMapper(const Options& o, const skeleton::Skeleton& sk, const std::vector<osm::Restriction>& restrictions,
-                std::unique_ptr<seg::Segmenter> model)
-      : o_(o), model_(std::move(model)), sk_(sk), tracker_(sk, tracking::RoadTrackerConfig::fromYaml(loadYamlFile(o.tracker_config)["tracker"])),
-        builder_(sk, camera::CameraModel::fromYamlFile(o.vehicle), bevOptions(o)),
-        explorer_(lanes::ExplorerOptions::fromYaml(loadYamlFile(o.lanes_config)["explorer"])),
-        assembler_(sk, intersections::IntersectionOptions::fromYaml(loadYamlFile(o.intersections_config)), restrictions) {}
+  OfflineMapper(const Options& o, const OfflineConfig& c, const skeleton::Skeleton& sk,
+                const std::vector<osm::Restriction>& restrictions, std::unique_ptr<seg::Segmenter> model)
+      : o_(o), model_(std::move(model)), sk_(sk), tracker_(sk, c.tracker.tracker),
+        builder_(sk, camera::CameraModel::fromYamlFile(o.vehicle), bevOptions(o, c.bev.options)),
+        explorer_(c.lanes.explorer),
+        assembler_(sk, c.lanes.intersections, restrictions) {}
 
   void onEvent(const lcm::LogEvent& ev) {
     if (ev.channel == channels::kPose) {
@@ -126,8 +151,7 @@ class OfflineMapper {
   const bev::BevBuilder& builder() const { return builder_; }
 
  private:
-  static bev::BevBuilderOptions bevOptions(const Options& o) {
-    auto b = bev::BevBuilderOptions::fromYaml(loadYamlFile(o.bev_config));
+  static bev::BevBuilderOptions bevOptions(const Options& o, bev::BevBuilderOptions b) {
     b.async_mesh = false;  // deterministic
     b.use_lidar = b.use_lidar && !o.no_lidar;
     if (b.use_lidar) {
@@ -219,15 +243,20 @@ int main(int argc, char** argv) {
   app.add_option("--bev-config", o.bev_config, "BEV builder options")->capture_default_str();
   app.add_option("--lanes-config", o.lanes_config, "lane exploration options")->capture_default_str();
   app.add_option("--tracker-config", o.tracker_config, "road tracker options")->capture_default_str();
-  app.add_option("--intersections-config", o.intersections_config, "intersection options")->capture_default_str();
+  app.add_option("--intersections-config", o.intersections_config,
+                 "intersection options (default: the file the lanes config names in `intersections:`, as the lane mapper)");
+  app.add_option("--map-config", o.map_config,
+                 "skeleton options and origin (default: the file the lanes config names in `map:`, as the lane mapper); "
+                 "--osm overrides its osm");
   app.add_flag("-q,--quiet", o.quiet, "no progress");
   CLI11_PARSE(app, argc, argv);
 
   try {
     const auto t0 = std::chrono::steady_clock::now();
     if (!fs::exists(o.log)) throw std::runtime_error("no such log file: " + o.log);
+    const OfflineConfig config = loadConfig(o);
     const osm::OsmData osm_data = osm::readOsm(o.osm);
-    const auto sk = skeleton::Skeleton::build(osm_data);
+    const auto sk = skeleton::Skeleton::build(osm_data, config.lanes.map.skeleton);
     lcm::LogFile log(o.log, "r");
     if (!log.good()) throw std::runtime_error("cannot read LCM log: " + o.log);
     if (o.oracle) o.semantic_channel = channels::kSemanticFrontTruth;
@@ -235,7 +264,7 @@ int main(int argc, char** argv) {
     if (o.semantic_channel.empty()) model = loadModel(o);
     const std::string labels = model ? "model " + model->name() + " on " + channels::kCameraFront : o.semantic_channel;
     fs::create_directories(fs::path(o.out) / "bev");
-    OfflineMapper mapper(o, sk, osm_data.restrictions, std::move(model));
+    OfflineMapper mapper(o, config, sk, osm_data.restrictions, std::move(model));
     const auto log_size = std::max<uintmax_t>(1, fs::file_size(o.log));
     int64_t events = 0;
     while (const lcm::LogEvent* ev = log.readNextEvent()) {

@@ -10,6 +10,8 @@
 //   }
 #pragma once
 
+#include "core/config/yaml_reader.h"
+
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <yaml-cpp/yaml.h>
@@ -86,6 +88,9 @@ class Process {
 
   const std::string& name() const { return name_; }
   const YAML::Node& config() const { return config_; }
+  // The same config through the strict reader (knows the file; `lcm_url` is already known): read
+  // every key through it, then call its finish() so that an unknown key is an error naming it.
+  const config::YamlReader& settings() const { return settings_; }
   lcm::LCM& lcm() { return *lcm_; }
   Counters& counters() { return counters_; }
   LatencyWindow& latency() { return latency_; }
@@ -107,6 +112,7 @@ class Process {
   std::string config_path_;
   std::string lcm_url_flag_;
   YAML::Node config_;
+  config::YamlReader settings_{YAML::Node()};
   std::unique_ptr<lcm::LCM> lcm_;
   Counters counters_;
   LatencyWindow latency_;

@@ -45,11 +45,6 @@ namespace {
 
 using namespace lanemap;
 
-template <typename T>
-void read(const YAML::Node& node, const char* key, T& value) {
-  if (node && node[key]) value = node[key].as<T>();
-}
-
 struct Settings {
   std::string camera_channel = channels::kCameraFront;
   std::string output_channel = channels::kSemanticFront;
@@ -236,33 +231,33 @@ int main(int argc, char** argv) {
   process.cli().add_option("--log-out", log_out, "... into this copy of it (with SEMANTIC_FRONT added), then exit");
   if (int rc = process.init(argc, argv); rc >= 0) return rc;
   try {
-    const YAML::Node& config = process.config();
+    const config::YamlReader& config = process.settings();
     Settings s;
-    read(config, "camera_channel", s.camera_channel);
-    read(config, "output_channel", s.output_channel);
-    read(config, "truth_channel", s.truth_channel);
-    std::string encoding = "png";
-    read(config, "encoding", encoding);
-    if (encoding != "png" && encoding != "raw") throw std::runtime_error("encoding must be png or raw, not '" + encoding + "'");
+    config.read("camera_channel", s.camera_channel);
+    config.read("output_channel", s.output_channel);
+    config.read("truth_channel", s.truth_channel);
+    const std::string encoding = config.get<std::string>("encoding", "png");
+    if (encoding != "png" && encoding != "raw") config.fail("encoding", "must be png or raw, not '" + encoding + "'");
     s.raw = encoding == "raw";
-    read(config, "queue_frames", s.queue_frames);
-    if (s.queue_frames < 1 || s.queue_frames > 8) throw std::runtime_error("queue_frames must be 1..8");
-    read(config, "expect_width", s.expect_width);
-    read(config, "expect_height", s.expect_height);
-    read(config, "lcm_queue", s.lcm_queue);
-    read(config, "debug_delay_ms", s.debug_delay_ms);
-    bool oracle = oracle_flag;
-    if (!oracle) read(config, "oracle", oracle);
+    if (config.read("queue_frames", s.queue_frames) && (s.queue_frames < 1 || s.queue_frames > 8)) {
+      config.fail("queue_frames", "must be 1..8");
+    }
+    config.read("expect_width", s.expect_width);
+    config.read("expect_height", s.expect_height);
+    config.read("lcm_queue", s.lcm_queue);
+    config.read("debug_delay_ms", s.debug_delay_ms);
+    const bool oracle = oracle_flag || config.get<bool>("oracle", false);
+    const int threads = config.get<int>("threads", 0);
+    config.allow({"model"});  // seg::ModelConfig reads the model block
+    config.finish();
     if (oracle) {
       std::cerr << "segmenter: oracle mode: " << s.truth_channel << " -> " << s.output_channel << "\n";
       OracleApp app(process, s);
       process.setState("oracle");
       return process.spin();
     }
-    int threads = 0;
-    read(config, "threads", threads);
     if (threads > 0) cv::setNumThreads(threads);
-    const seg::ModelConfig mc = seg::ModelConfig::fromSegmenterConfig(config, model_flag, LANEMAP_SOURCE_DIR);
+    const seg::ModelConfig mc = seg::ModelConfig::fromSegmenterConfig(process.config(), model_flag, LANEMAP_SOURCE_DIR);
     auto model = std::make_unique<seg::Segmenter>(mc);
     std::cerr << "segmenter: model " << mc.path << " (" << model->modelClasses() << " classes, input "
               << mc.input_width << "x" << mc.input_height << "), " << s.camera_channel << " -> "

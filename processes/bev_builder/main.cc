@@ -191,7 +191,7 @@ int main(int argc, char** argv) {
   Process process("bev_builder");
   std::string osm_flag, store_flag, channel_flag, vehicle_flag;
   bool no_lidar = false;
-  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: osm of the map config the config names in map:)");
+  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: the osm of the config's map: file)");
   process.cli().add_option("--store", store_flag, "map store folder (default: config store)");
   process.cli().add_option("--semantic-channel", channel_flag, "semantic channel (default: config semantic_channel)");
   process.cli().add_option("--vehicle", vehicle_flag, "vehicle YAML: camera, lidar mount (default: config vehicle)");

@@ -227,7 +227,7 @@ class LaneMapperApp {
 int main(int argc, char** argv) {
   lanemap::Process process("lane_mapper");
   std::string osm_flag, store_flag;
-  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: osm of the map config the config names in map:)");
+  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: the osm of the config's map: file)");
   process.cli().add_option("--store", store_flag, "map store folder (default: config store)");
   if (int rc = process.init(argc, argv); rc >= 0) return rc;
   try {

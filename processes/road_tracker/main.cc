@@ -78,7 +78,7 @@ class RoadTrackerApp {
 int main(int argc, char** argv) {
   lanemap::Process process("road_tracker");
   std::string osm_flag;
-  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: osm of the map config the config names in map:)");
+  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: the osm of the config's map: file)");
   if (int rc = process.init(argc, argv); rc >= 0) return rc;
   try {
     const auto settings = lanemap::RoadTrackerSettings::fromYaml(process.settings());

@@ -355,7 +355,7 @@ int main(int argc, char** argv) {
       "Live: lanemap-viewer --osm roads.osm   (subscribes to POSE, ROAD_EVENT, BEV_ROAD, LANE_MAP, STATUS)\n"
       "Store: lanemap-viewer --store DIR --osm roads.osm   (a finished map store, no LCM)\n"
       "Then open the URL it prints (default http://127.0.0.1:8765/).");
-  cli.add_option("--osm", osm_flag, "OSM file of the skeleton (default: osm of the map config the config names in map:)");
+  cli.add_option("--osm", osm_flag, "OSM file of the skeleton (default: the osm of the config's map: file)");
   cli.add_option("--store", store, "browse this finished map store (lanes/, graph.lcmlog) instead of the bus");
   cli.add_option("--listen", listen_flag, "address to listen on (default: config listen, else 127.0.0.1; 0.0.0.0 = every interface)");
   cli.add_option("--port", port_flag, "TCP port (default: config port, else 8765; 0 = any free port)")->check(CLI::Range(0, 65535));

@@ -44,6 +44,7 @@
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
 #include "processes/framework/process_configs.h"
+#include "core/config/vehicle_config.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -85,11 +86,12 @@ struct OfflineConfig {
   LaneMapperSettings lanes;
   RoadTrackerSettings tracker;
   BevBuilderSettings bev;
+  config::VehicleConfig vehicle;  // --vehicle, read whole as the BEV builder reads it
 };
 
 OfflineConfig loadConfig(const Options& o) {
   OfflineConfig c{LaneMapperSettings::fromYamlFile(o.lanes_config), RoadTrackerSettings::fromYamlFile(o.tracker_config),
-                  BevBuilderSettings::fromYamlFile(o.bev_config)};
+                  BevBuilderSettings::fromYamlFile(o.bev_config), config::VehicleConfig::fromYamlFile(o.vehicle)};
   if (!o.map_config.empty()) c.lanes.map = config::MapConfig::fromYamlFile(o.map_config);
   if (!o.intersections_config.empty()) c.lanes.intersections = intersectionsFromFile(o.intersections_config);
   return c;
@@ -105,7 +107,7 @@ class OfflineMapper {
   OfflineMapper(const Options& o, const OfflineConfig& c, const skeleton::Skeleton& sk,
                 const std::vector<osm::Restriction>& restrictions, std::unique_ptr<seg::Segmenter> model)
       : o_(o), model_(std::move(model)), sk_(sk), tracker_(sk, c.tracker.tracker),
-        builder_(sk, camera::CameraModel::fromYamlFile(o.vehicle), bevOptions(o, c.bev.options)),
+        builder_(sk, c.vehicle.camera, bevOptions(o, c)),
         explorer_(c.lanes.explorer),
         assembler_(sk, c.lanes.intersections, restrictions) {}
 
@@ -151,12 +153,11 @@ class OfflineMapper {
   const bev::BevBuilder& builder() const { return builder_; }
 
  private:
-  static bev::BevBuilderOptions bevOptions(const Options& o, bev::BevBuilderOptions b) {
+  static bev::BevBuilderOptions bevOptions(const Options& o, const OfflineConfig& c) {
+    bev::BevBuilderOptions b = c.bev.options;
     b.async_mesh = false;  // deterministic
     b.use_lidar = b.use_lidar && !o.no_lidar;
-    if (b.use_lidar) {
-      b.lidar_to_vehicle = camera::mountFromYaml(loadYamlFile(o.vehicle)["lidar"]["mount"], o.vehicle + ": lidar.mount");
-    }
+    if (b.use_lidar) b.lidar_to_vehicle = c.vehicle.lidarToVehicle();
     return b;
   }
 
@@ -216,9 +217,10 @@ class OfflineMapper {
 // The configured segmentation model (config/segmenter.yaml's model block, --model overriding its
 // path), as lanemap-segmenter loads it.
 std::unique_ptr<seg::Segmenter> loadModel(const Options& o) {
-  const YAML::Node config = loadYamlFile(o.segmenter_config);
-  if (config["threads"] && config["threads"].as<int>() > 0) cv::setNumThreads(config["threads"].as<int>());
-  return std::make_unique<seg::Segmenter>(seg::ModelConfig::fromSegmenterConfig(config, o.model, LANEMAP_SOURCE_DIR));
+  const SegmenterSettings s = SegmenterSettings::fromYamlFile(o.segmenter_config, o.model);
+  if (s.threads > 0) cv::setNumThreads(s.threads);
+  if (!s.model) throw std::runtime_error(o.segmenter_config + ": no model block (give --model FILE.onnx)");
+  return std::make_unique<seg::Segmenter>(*s.model);
 }
 
 }  // namespace

@@ -23,8 +23,6 @@ size_t editDistance(const std::string& a, const std::string& b) {
   return row[b.size()];
 }
 
-std::string fileName(const std::string& file) { return file.empty() ? "config" : file; }
-
 }  // namespace
 
 YamlReader YamlReader::loadFile(const std::string& path) {
@@ -128,12 +126,10 @@ void YamlReader::failHere(const std::string& what) const {
 }
 
 std::string YamlReader::where(const YAML::Node& at) const {
-  std::string w = fileName(s_->file);
-  if (at.IsDefined()) {
-    const YAML::Mark m = at.Mark();
-    if (!m.is_null()) w += ":" + std::to_string(m.line + 1);
-  }
-  return w;
+  // "file:line", or "line N" for a node read from a string, "config" when neither is known.
+  const YAML::Mark m = at.IsDefined() ? at.Mark() : YAML::Mark::null_mark();
+  if (s_->file.empty()) return m.is_null() ? std::string("config") : "line " + std::to_string(m.line + 1);
+  return m.is_null() ? s_->file : s_->file + ":" + std::to_string(m.line + 1);
 }
 
 std::string YamlReader::describe(const YAML::Node& v) {

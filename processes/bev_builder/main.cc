@@ -28,6 +28,7 @@
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
 #include "processes/framework/process_configs.h"
+#include "core/config/vehicle_config.h"
 
 #include <chrono>
 #include <iostream>
@@ -207,10 +208,11 @@ int main(int argc, char** argv) {
     if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the map config");
     if (store.empty()) throw std::runtime_error("no map store: give --store or `store:` in the config");
     auto sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(osm::readOsm(osm), settings.map.skeleton));
-    const auto camera = camera::CameraModel::fromYamlFile(vehicle);
+    const auto vehicle_config = config::VehicleConfig::fromYamlFile(vehicle);
+    const camera::CameraModel& camera = vehicle_config.camera;
     bev::BevBuilderOptions options = settings.options;
     if (no_lidar) options.use_lidar = false;
-    if (options.use_lidar) options.lidar_to_vehicle = camera::mountFromYaml(loadYamlFile(vehicle)["lidar"]["mount"], vehicle + ": lidar.mount");
+    if (options.use_lidar) options.lidar_to_vehicle = vehicle_config.lidarToVehicle();
     std::cerr << "bev_builder: " << sk->roads().size() << " atomic roads from " << osm << ", " << channel
               << (options.use_lidar ? " + LIDAR mesh" : " (flat ground)") << ", store " << store << "\n";
     BevBuilderApp app(process, std::move(sk), camera, options, store);

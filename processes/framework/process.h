@@ -61,18 +61,6 @@ std::string resolveLcmUrl(const std::string& flag, const YAML::Node& config);
 // Loads a YAML file; throws std::runtime_error naming the file and the problem.
 YAML::Node loadYamlFile(const std::string& path);
 
-// Sets `value` from config[key] when the key is present; a value of the wrong type throws
-// std::runtime_error naming `owner` (the process or driver) and the key.
-template <typename T>
-void readConfigKey(const YAML::Node& config, const char* key, T& value, const std::string& owner) {
-  if (!config[key]) return;
-  try {
-    value = config[key].as<T>();
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(owner + " config key '" + std::string(key) + "': " + e.what());
-  }
-}
-
 class Process {
  public:
   explicit Process(std::string name);

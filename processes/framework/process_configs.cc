@@ -113,4 +113,35 @@ ViewerSettings ViewerSettings::fromYaml(const config::YamlReader& r) {
 }
 ViewerSettings ViewerSettings::fromYamlFile(const std::string& path) { return loadStrictly<ViewerSettings>(path); }
 
+SegmenterSettings SegmenterSettings::fromYaml(const config::YamlReader& r, const std::string& model_path) {
+  SegmenterSettings s;
+  r.read("camera_channel", s.camera_channel);
+  r.read("output_channel", s.output_channel);
+  r.read("truth_channel", s.truth_channel);
+  const std::string encoding = r.get<std::string>("encoding", "png");
+  if (encoding != "png" && encoding != "raw") r.fail("encoding", "must be png or raw, not '" + encoding + "'");
+  s.raw = encoding == "raw";
+  if (r.read("queue_frames", s.queue_frames) && (s.queue_frames < 1 || s.queue_frames > 8)) {
+    r.fail("queue_frames", "must be 1..8");
+  }
+  r.read("expect_width", s.expect_width);
+  r.read("expect_height", s.expect_height);
+  positiveQueue(r, "lcm_queue", s.lcm_queue);
+  r.read("debug_delay_ms", s.debug_delay_ms);
+  r.read("oracle", s.oracle);
+  r.read("threads", s.threads);
+  if (r.has("model") || !model_path.empty()) {
+    // With model_path, the name defaults to its stem unless the config names the model.
+    s.model = seg::ModelConfig::fromYaml(r.section("model"), LANEMAP_SOURCE_DIR, model_path);
+  }
+  return s;
+}
+SegmenterSettings SegmenterSettings::fromYamlFile(const std::string& path, const std::string& model_path) {
+  const auto r = config::YamlReader::loadFile(path);
+  r.allow({"lcm_url"});
+  SegmenterSettings s = fromYaml(r, model_path);
+  r.finish();
+  return s;
+}
+
 }  // namespace lanemap

@@ -16,11 +16,13 @@
 #include "core/config/yaml_reader.h"
 #include "core/intersections/intersections.h"
 #include "core/lanes/options.h"
+#include "core/seg/segmenter.h"
 #include "core/tracking/road_tracker.h"
 #include "core/viewer/http_server.h"
 #include "core/viewer/viewer_state.h"
 #include "processes/framework/channels.h"
 
+#include <optional>
 #include <string>
 
 namespace lanemap {
@@ -83,6 +85,26 @@ struct ViewerSettings {
   int pose_queue = 1000;
   static ViewerSettings fromYaml(const config::YamlReader& r);
   static ViewerSettings fromYamlFile(const std::string& path);
+};
+
+// config/segmenter.yaml
+struct SegmenterSettings {
+  std::string camera_channel = channels::kCameraFront;
+  std::string output_channel = channels::kSemanticFront;
+  std::string truth_channel = channels::kSemanticFrontTruth;
+  bool raw = false;            // encoding: raw (else png)
+  int queue_frames = 1;        // 1..8
+  int expect_width = 0, expect_height = 0;
+  int lcm_queue = 30;
+  int debug_delay_ms = 0;
+  bool oracle = false;
+  int threads = 0;             // cv::setNumThreads when > 0
+  // The model block (relative paths: the working directory, else the repository root), its path
+  // replaced by `model_path` when given; absent when the config has no model block and no
+  // model_path is given (the oracle needs none).
+  std::optional<seg::ModelConfig> model;
+  static SegmenterSettings fromYaml(const config::YamlReader& r, const std::string& model_path = "");
+  static SegmenterSettings fromYamlFile(const std::string& path, const std::string& model_path = "");
 };
 
 }  // namespace lanemap

@@ -30,6 +30,7 @@
 #include "processes/framework/channels.h"
 #include "processes/framework/lcm_log_writer.h"
 #include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
 #include "processes/segmenter/frame_queue.h"
 
 #include <opencv2/core.hpp>
@@ -45,16 +46,7 @@ namespace {
 
 using namespace lanemap;
 
-struct Settings {
-  std::string camera_channel = channels::kCameraFront;
-  std::string output_channel = channels::kSemanticFront;
-  std::string truth_channel = channels::kSemanticFrontTruth;
-  bool raw = false;            // encoding: raw (else png)
-  int queue_frames = 1;
-  int expect_width = 0, expect_height = 0;
-  int lcm_queue = 30;
-  int debug_delay_ms = 0;
-};
+using Settings = SegmenterSettings;  // config/segmenter.yaml (processes/framework/process_configs.h)
 
 // A camera frame and when LCM received it (wall clock, microseconds).
 struct ReceivedFrame {
@@ -231,33 +223,18 @@ int main(int argc, char** argv) {
   process.cli().add_option("--log-out", log_out, "... into this copy of it (with SEMANTIC_FRONT added), then exit");
   if (int rc = process.init(argc, argv); rc >= 0) return rc;
   try {
-    const config::YamlReader& config = process.settings();
-    Settings s;
-    config.read("camera_channel", s.camera_channel);
-    config.read("output_channel", s.output_channel);
-    config.read("truth_channel", s.truth_channel);
-    const std::string encoding = config.get<std::string>("encoding", "png");
-    if (encoding != "png" && encoding != "raw") config.fail("encoding", "must be png or raw, not '" + encoding + "'");
-    s.raw = encoding == "raw";
-    if (config.read("queue_frames", s.queue_frames) && (s.queue_frames < 1 || s.queue_frames > 8)) {
-      config.fail("queue_frames", "must be 1..8");
-    }
-    config.read("expect_width", s.expect_width);
-    config.read("expect_height", s.expect_height);
-    config.read("lcm_queue", s.lcm_queue);
-    config.read("debug_delay_ms", s.debug_delay_ms);
-    const bool oracle = oracle_flag || config.get<bool>("oracle", false);
-    const int threads = config.get<int>("threads", 0);
-    config.allow({"model"});  // seg::ModelConfig reads the model block
-    config.finish();
+    const Settings s = SegmenterSettings::fromYaml(process.settings(), model_flag);
+    process.settings().finish();
+    const bool oracle = oracle_flag || s.oracle;
     if (oracle) {
       std::cerr << "segmenter: oracle mode: " << s.truth_channel << " -> " << s.output_channel << "\n";
       OracleApp app(process, s);
       process.setState("oracle");
       return process.spin();
     }
-    if (threads > 0) cv::setNumThreads(threads);
-    const seg::ModelConfig mc = seg::ModelConfig::fromSegmenterConfig(process.config(), model_flag, LANEMAP_SOURCE_DIR);
+    if (s.threads > 0) cv::setNumThreads(s.threads);
+    if (!s.model) throw std::runtime_error("no model: give --model FILE.onnx or a model: block (its path) in the config");
+    const seg::ModelConfig& mc = *s.model;
     auto model = std::make_unique<seg::Segmenter>(mc);
     std::cerr << "segmenter: model " << mc.path << " (" << model->modelClasses() << " classes, input "
               << mc.input_width << "x" << mc.input_height << "), " << s.camera_channel << " -> "

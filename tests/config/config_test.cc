@@ -5,6 +5,7 @@
 // same files (processes/framework/process_configs.h).
 #include "core/camera/camera_model.h"
 #include "core/config/map_config.h"
+#include "core/config/vehicle_config.h"
 #include "core/config/yaml_reader.h"
 #include "core/seg/segmenter.h"
 #include "core/sim/drive.h"
@@ -36,7 +37,9 @@ const std::string kConfigDir = std::string(LANEMAP_SOURCE_DIR) + "/config";
 void runs(const std::string& cmd, int rc, const std::string& after_load = "") {
   const auto r = lt::runCommand("timeout 30 " + cmd);
   EXPECT_EQ(r.exit_code, rc) << cmd << "\n" << r.output;
-  if (!after_load.empty()) EXPECT_NE(r.output.find(after_load), std::string::npos) << cmd << "\n" << r.output;
+  if (!after_load.empty()) {
+    EXPECT_NE(r.output.find(after_load), std::string::npos) << cmd << "\n" << r.output;
+  }
   EXPECT_EQ(r.output.find("unknown key"), std::string::npos) << r.output;
 }
 
@@ -51,18 +54,38 @@ std::map<std::string, std::function<void(const std::string&)>> readers() {
   m["lane_mapper.yaml"] = [](const std::string& f) { (void)LaneMapperSettings::fromYamlFile(f); };
   m["viewer.yaml"] = [](const std::string& f) { (void)ViewerSettings::fromYamlFile(f); };
   m["vehicle.yaml"] = [](const std::string& f) {
-    (void)camera::CameraModel::fromYamlFile(f);
-    (void)camera::mountFromYaml(YAML::LoadFile(f)["lidar"]["mount"], f + ": lidar.mount");
-    (void)sim::LidarScannerOptions::fromYamlFile(f);
+    (void)config::VehicleConfig::fromYamlFile(f);   // the BEV builder's and lanemap-offline's
+    (void)sim::LidarScannerOptions::fromYamlFile(f);  // the simulator's
   };
   m["segmenter.yaml"] = [](const std::string& f) {
-    (void)seg::ModelConfig::fromSegmenterConfig(YAML::LoadFile(f), "", LANEMAP_SOURCE_DIR);
+    const auto s = SegmenterSettings::fromYamlFile(f);  // lanemap-segmenter's and lanemap-offline's
+    ASSERT_TRUE(s.model.has_value());
+    // The same model as the YAML::Node reader gives (the tests' and benchmarks' path), with and
+    // without a --model override.
+    for (const std::string over : {"", "/tmp/other.onnx"}) {
+      const auto a = SegmenterSettings::fromYamlFile(f, over).model.value();
+      const auto b = seg::ModelConfig::fromSegmenterConfig(YAML::LoadFile(f), over, LANEMAP_SOURCE_DIR);
+      EXPECT_EQ(a.path, b.path);
+      EXPECT_EQ(a.name, b.name);
+      EXPECT_EQ(a.input_width, b.input_width);
+      EXPECT_EQ(a.input_height, b.input_height);
+      EXPECT_EQ(a.crop_top, b.crop_top);
+      EXPECT_EQ(a.rgb, b.rgb);
+      EXPECT_EQ(a.scale, b.scale);
+      EXPECT_EQ(a.mean, b.mean);
+      EXPECT_EQ(a.std, b.std);
+      EXPECT_EQ(a.output, b.output);
+      EXPECT_EQ(a.class_map, b.class_map);
+      EXPECT_EQ(a.upsample_scores, b.upsample_scores);
+    }
+    EXPECT_EQ(SegmenterSettings::fromYamlFile(f, "/tmp/other.onnx").model->path, "/tmp/other.onnx");
   };
   m["sim_world.yaml"] = [](const std::string& f) { (void)sim::WorldOptions::fromYamlFile(f); };
-  m["sim_drive.yaml"] = [](const std::string& f) {
-    const YAML::Node n = YAML::LoadFile(f);
-    (void)sim::DriveOptions::fromYaml(n["drive"]);
-    (void)sim::PoseNoiseOptions::fromYaml(n["pose_noise"]);
+  m["sim_drive.yaml"] = [](const std::string& f) {  // lanemap-sim reads its two sections
+    const auto r = YamlReader::loadFile(f);
+    (void)sim::DriveOptions::fromYaml(r.section("drive"));
+    (void)sim::PoseNoiseOptions::fromYaml(r.section("pose_noise"));
+    r.finish();
   };
   // The drivers read theirs in their executables (strictly: tests/drivers show unknown keys fail).
   m["pose_nmea.yaml"] = [](const std::string& f) {
@@ -168,8 +191,22 @@ TEST(Config, UnknownKeysAreErrorsNamingFileAndKey) {
   expectError([&] { intersectionsFromFile(f); }, f, "allow_uturns", "did you mean 'allow_u_turns'?");
   f = editedCopy(dir, "map.yaml", [](YAML::Node& n) { n["skeleton"]["junction_radius_m"] = 5.0; });
   expectError([&] { config::MapConfig::fromYamlFile(f); }, f, "skeleton.junction_radius_m", "unknown key");
-  // The map file a process config names is read strictly too, and its errors name that file.
   const std::string map = f;
+  f = editedCopy(dir, "vehicle.yaml", [](YAML::Node& n) { n["camera"]["mount"]["pich_deg"] = 4.0; });
+  expectError([&] { config::VehicleConfig::fromYamlFile(f); }, f, "camera.mount.pich_deg", "did you mean 'pitch_deg'?");
+  f = editedCopy(dir, "vehicle.yaml", [](YAML::Node& n) { n["lidar"]["rmp"] = 600; });
+  expectError([&] { config::VehicleConfig::fromYamlFile(f); }, f, "lidar.rmp", "did you mean 'rpm'?");
+  f = editedCopy(dir, "segmenter.yaml", [](YAML::Node& n) { n["model"]["crop_tp"] = 120; });
+  expectError([&] { SegmenterSettings::fromYamlFile(f); }, f, "model.crop_tp", "did you mean 'crop_top'?");
+  f = editedCopy(dir, "sim_world.yaml", [](YAML::Node& n) { n["surface"]["max_grad"] = 0.05; });
+  try {
+    sim::WorldOptions::fromYamlFile(f);
+    ADD_FAILURE() << "no error";
+  } catch (const sim::WorldConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(f + ":"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("did you mean 'max_grade'?"), std::string::npos) << e.what();
+  }
+  // The map file a process config names is read strictly too, and its errors name that file.
   f = editedCopy(dir, "road_tracker.yaml", [&](YAML::Node& n) { n["map"] = map; });
   expectError([&] { RoadTrackerSettings::fromYamlFile(f); }, map, "skeleton.junction_radius_m", "unknown key");
 }
@@ -191,6 +228,14 @@ TEST(Config, MistypedValuesAreErrorsNamingFileAndKey) {
   expectError([&] { config::MapConfig::fromYamlFile(f); }, f, "skeleton.junction_merge_radius_m", "must be > 0");
   f = editedCopy(dir, "viewer.yaml", [](YAML::Node& n) { n["port"] = 70000; });
   expectError([&] { ViewerSettings::fromYamlFile(f); }, f, "port", "must be within [0, 65535]");
+  f = editedCopy(dir, "vehicle.yaml", [](YAML::Node& n) { n["camera"]["width"] = "wide"; });
+  expectError([&] { config::VehicleConfig::fromYamlFile(f); }, f, "camera.width", "must be an integer, not 'wide'");
+  f = editedCopy(dir, "vehicle.yaml", [](YAML::Node& n) { n["lidar"]["mount"].remove("z"); });
+  expectError([&] { config::VehicleConfig::fromYamlFile(f); }, f, "lidar.mount.z", "is required");
+  f = editedCopy(dir, "segmenter.yaml", [](YAML::Node& n) { n["model"]["mean"] = YAML::Load("[0.5, 0.5]"); });
+  expectError([&] { SegmenterSettings::fromYamlFile(f); }, f, "model.mean", "must be 3 numbers");
+  f = editedCopy(dir, "segmenter.yaml", [](YAML::Node& n) { n["queue_frames"] = 0; });
+  expectError([&] { SegmenterSettings::fromYamlFile(f); }, f, "queue_frames", "must be 1..8");
   // A value check over the section (the explorer's ranges) names the file and the section.
   f = editedCopy(dir, "lane_mapper.yaml", [](YAML::Node& n) { n["explorer"]["v_min"] = 2.0; });
   expectError([&] { LaneMapperSettings::fromYamlFile(f); }, f, "explorer", "0 < v_min <= v_max");

@@ -24,6 +24,7 @@
 #include "core/bev/bev_builder.h"
 #include "core/bev/bev_store.h"
 #include "core/camera/camera_model.h"
+#include "core/config/vehicle_config.h"
 #include "core/io/geojson.h"
 #include "core/io/lanelet2.h"
 #include "core/io/map_png.h"
@@ -44,7 +45,6 @@
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
 #include "processes/framework/process_configs.h"
-#include "core/config/vehicle_config.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>

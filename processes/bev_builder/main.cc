@@ -17,6 +17,7 @@
 #include "core/bev/bev_builder.h"
 #include "core/bev/bev_store.h"
 #include "core/camera/camera_model.h"
+#include "core/config/vehicle_config.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
 #include "lanemap/bev_road_t.hpp"
@@ -28,7 +29,6 @@
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
 #include "processes/framework/process_configs.h"
-#include "core/config/vehicle_config.h"
 
 #include <chrono>
 #include <iostream>

@@ -13,11 +13,18 @@
 // --oracle takes the simulator's SEMANTIC_FRONT_TRUTH instead, --semantic-channel any label
 // channel already in the log (SEMANTIC_FRONT of a log lanemap-segmenter --log-out wrote).
 //
+// Config: the same files and readers as the live processes (processes/framework/process_configs.h):
+// --lanes-config (config/lane_mapper.yaml) gives the explorer options and names the map block
+// (`map:`, config/map.yaml: skeleton options, origin) and the intersections block
+// (`intersections:`, config/intersections.yaml), as the lane mapper reads them; --tracker-config
+// and --bev-config are the road tracker's and the BEV builder's files. --osm is required here.
+//
 // One road's trouble never costs the map: a road whose exploration fails is named on stderr and in
 // summary.json (roads_failed, with the reason), and every other road is still mapped.
 #include "core/bev/bev_builder.h"
 #include "core/bev/bev_store.h"
 #include "core/camera/camera_model.h"
+#include "core/config/vehicle_config.h"
 #include "core/io/geojson.h"
 #include "core/io/lanelet2.h"
 #include "core/io/map_png.h"
@@ -37,6 +44,7 @@
 #include "processes/framework/channels.h"
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -66,9 +74,28 @@ struct Options {
   std::string bev_config = std::string(LANEMAP_SOURCE_DIR) + "/config/bev_builder.yaml";
   std::string lanes_config = std::string(LANEMAP_SOURCE_DIR) + "/config/lane_mapper.yaml";
   std::string tracker_config = std::string(LANEMAP_SOURCE_DIR) + "/config/road_tracker.yaml";
-  std::string intersections_config = std::string(LANEMAP_SOURCE_DIR) + "/config/intersections.yaml";
+  std::string intersections_config;  // "": the lanes config's `intersections:` (as the lane mapper)
+  std::string map_config;            // "": the lanes config's `map:` (as the lane mapper)
   bool no_lidar = false, quiet = false;
 };
+
+// What the live processes read from the same files, through the same functions
+// (processes/framework/process_configs.h): the skeleton and intersections exactly as the lane
+// mapper builds them, the tracker's and the BEV builder's options as theirs.
+struct OfflineConfig {
+  LaneMapperSettings lanes;
+  RoadTrackerSettings tracker;
+  BevBuilderSettings bev;
+  config::VehicleConfig vehicle;  // --vehicle, read whole as the BEV builder reads it
+};
+
+OfflineConfig loadConfig(const Options& o) {
+  OfflineConfig c{LaneMapperSettings::fromYamlFile(o.lanes_config), RoadTrackerSettings::fromYamlFile(o.tracker_config),
+                  BevBuilderSettings::fromYamlFile(o.bev_config), config::VehicleConfig::fromYamlFile(o.vehicle)};
+  if (!o.map_config.empty()) c.lanes.map = config::MapConfig::fromYamlFile(o.map_config);
+  if (!o.intersections_config.empty()) c.lanes.intersections = intersectionsFromFile(o.intersections_config);
+  return c;
+}
 
 template <typename T>
 bool decode(const lcm::LogEvent& ev, T& msg) {
@@ -77,12 +104,12 @@ bool decode(const lcm::LogEvent& ev, T& msg) {
 
 class OfflineMapper {
  public:
-  OfflineMapper(const Options& o, const skeleton::Skeleton& sk, const std::vector<osm::Restriction>& restrictions,
-                std::unique_ptr<seg::Segmenter> model)
-      : o_(o), model_(std::move(model)), sk_(sk), tracker_(sk, tracking::RoadTrackerConfig::fromYaml(loadYamlFile(o.tracker_config)["tracker"])),
-        builder_(sk, camera::CameraModel::fromYamlFile(o.vehicle), bevOptions(o)),
-        explorer_(lanes::ExplorerOptions::fromYaml(loadYamlFile(o.lanes_config)["explorer"])),
-        assembler_(sk, intersections::IntersectionOptions::fromYaml(loadYamlFile(o.intersections_config)), restrictions) {}
+  OfflineMapper(const Options& o, const OfflineConfig& c, const skeleton::Skeleton& sk,
+                const std::vector<osm::Restriction>& restrictions, std::unique_ptr<seg::Segmenter> model)
+      : o_(o), model_(std::move(model)), sk_(sk), tracker_(sk, c.tracker.tracker),
+        builder_(sk, c.vehicle.camera, bevOptions(o, c)),
+        explorer_(c.lanes.explorer),
+        assembler_(sk, c.lanes.intersections, restrictions) {}
 
   void onEvent(const lcm::LogEvent& ev) {
     if (ev.channel == channels::kPose) {
@@ -126,13 +153,11 @@ class OfflineMapper {
   const bev::BevBuilder& builder() const { return builder_; }
 
  private:
-  static bev::BevBuilderOptions bevOptions(const Options& o) {
-    auto b = bev::BevBuilderOptions::fromYaml(loadYamlFile(o.bev_config));
+  static bev::BevBuilderOptions bevOptions(const Options& o, const OfflineConfig& c) {
+    bev::BevBuilderOptions b = c.bev.options;
     b.async_mesh = false;  // deterministic
     b.use_lidar = b.use_lidar && !o.no_lidar;
-    if (b.use_lidar) {
-      b.lidar_to_vehicle = camera::mountFromYaml(loadYamlFile(o.vehicle)["lidar"]["mount"], o.vehicle + ": lidar.mount");
-    }
+    if (b.use_lidar) b.lidar_to_vehicle = c.vehicle.lidarToVehicle();
     return b;
   }
 
@@ -192,9 +217,10 @@ class OfflineMapper {
 // The configured segmentation model (config/segmenter.yaml's model block, --model overriding its
 // path), as lanemap-segmenter loads it.
 std::unique_ptr<seg::Segmenter> loadModel(const Options& o) {
-  const YAML::Node config = loadYamlFile(o.segmenter_config);
-  if (config["threads"] && config["threads"].as<int>() > 0) cv::setNumThreads(config["threads"].as<int>());
-  return std::make_unique<seg::Segmenter>(seg::ModelConfig::fromSegmenterConfig(config, o.model, LANEMAP_SOURCE_DIR));
+  const SegmenterSettings s = SegmenterSettings::fromYamlFile(o.segmenter_config, o.model);
+  if (s.threads > 0) cv::setNumThreads(s.threads);
+  if (!s.model) throw std::runtime_error(o.segmenter_config + ": no model block (give --model FILE.onnx)");
+  return std::make_unique<seg::Segmenter>(*s.model);
 }
 
 }  // namespace
@@ -219,15 +245,20 @@ int main(int argc, char** argv) {
   app.add_option("--bev-config", o.bev_config, "BEV builder options")->capture_default_str();
   app.add_option("--lanes-config", o.lanes_config, "lane exploration options")->capture_default_str();
   app.add_option("--tracker-config", o.tracker_config, "road tracker options")->capture_default_str();
-  app.add_option("--intersections-config", o.intersections_config, "intersection options")->capture_default_str();
+  app.add_option("--intersections-config", o.intersections_config,
+                 "intersection options (default: the file the lanes config names in `intersections:`, as the lane mapper)");
+  app.add_option("--map-config", o.map_config,
+                 "skeleton options and origin (default: the file the lanes config names in `map:`, as the lane mapper); "
+                 "--osm overrides its osm");
   app.add_flag("-q,--quiet", o.quiet, "no progress");
   CLI11_PARSE(app, argc, argv);
 
   try {
     const auto t0 = std::chrono::steady_clock::now();
     if (!fs::exists(o.log)) throw std::runtime_error("no such log file: " + o.log);
+    const OfflineConfig config = loadConfig(o);
     const osm::OsmData osm_data = osm::readOsm(o.osm);
-    const auto sk = skeleton::Skeleton::build(osm_data);
+    const auto sk = skeleton::Skeleton::build(osm_data, config.lanes.map.skeleton);
     lcm::LogFile log(o.log, "r");
     if (!log.good()) throw std::runtime_error("cannot read LCM log: " + o.log);
     if (o.oracle) o.semantic_channel = channels::kSemanticFrontTruth;
@@ -235,7 +266,7 @@ int main(int argc, char** argv) {
     if (o.semantic_channel.empty()) model = loadModel(o);
     const std::string labels = model ? "model " + model->name() + " on " + channels::kCameraFront : o.semantic_channel;
     fs::create_directories(fs::path(o.out) / "bev");
-    OfflineMapper mapper(o, sk, osm_data.restrictions, std::move(model));
+    OfflineMapper mapper(o, config, sk, osm_data.restrictions, std::move(model));
     const auto log_size = std::max<uintmax_t>(1, fs::file_size(o.log));
     int64_t events = 0;
     while (const lcm::LogEvent* ev = log.readNextEvent()) {

@@ -1,4 +1,5 @@
 #include "core/bev/bev_builder.h"
+#include "core/config/yaml_reader.h"
 #include "core/io/image_header.h"
 
 #include <opencv2/imgcodecs.hpp>
@@ -13,63 +14,70 @@ namespace lanemap::bev {
 
 namespace {
 
-template <typename T>
-void read(const YAML::Node& node, const char* key, T& value) {
-  if (node && node[key]) value = node[key].as<T>();
-}
-
 double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-void readGround(const YAML::Node& n, ground::GroundExtractionOptions& g) {
-  read(n, "sectors", g.sectors);
-  read(n, "range_edges_m", g.range_edges_m);
-  read(n, "band_base_m", g.band_base_m);
-  read(n, "band_slope", g.band_slope);
-  read(n, "distance_threshold_m", g.distance_threshold_m);
-  read(n, "max_tilt_deg", g.max_tilt_deg);
-  read(n, "min_points", g.min_points);
-  read(n, "max_iterations", g.max_iterations);
-  if (g.sectors < 1 || g.range_edges_m.size() < 2) throw std::runtime_error("lidar.ground: sectors >= 1 and two range edges at least");
+void readGround(const config::YamlReader& n, ground::GroundExtractionOptions& g) {
+  n.read("sectors", g.sectors);
+  n.read("range_edges_m", g.range_edges_m);
+  n.read("band_base_m", g.band_base_m);
+  n.read("band_slope", g.band_slope);
+  n.read("distance_threshold_m", g.distance_threshold_m);
+  n.read("max_tilt_deg", g.max_tilt_deg);
+  n.read("min_points", g.min_points);
+  n.read("max_iterations", g.max_iterations);
+  if (g.sectors < 1) n.fail("sectors", "must be >= 1");
+  if (g.range_edges_m.size() < 2) n.fail("range_edges_m", "must have two range edges at least");
 }
 
 }  // namespace
 
 BevBuilderOptions BevBuilderOptions::fromYaml(const YAML::Node& n) {
+  const config::YamlReader r(n);
+  BevBuilderOptions o = fromYaml(r);
+  r.finishSections();  // the top level also holds lanemap-bev-builder's own keys (osm, store, ...)
+  return o;
+}
+
+BevBuilderOptions BevBuilderOptions::fromYaml(const config::YamlReader& n) {
   BevBuilderOptions o;
-  read(n["grid"], "resolution_m", o.accumulator.grid.resolution_m);
-  read(n["grid"], "tile_cells", o.accumulator.grid.tile_cells);
+  const auto grid = n.section("grid");
+  grid.read("resolution_m", o.accumulator.grid.resolution_m);
+  grid.read("tile_cells", o.accumulator.grid.tile_cells);
   o.projector.resolution_m = o.accumulator.grid.resolution_m;
-  const YAML::Node p = n["projection"];
-  read(p, "max_range_m", o.projector.max_range_m);
-  read(p, "sample_spacing_m", o.projector.sample_spacing_m);
-  read(p, "lane_separation", o.projector.lane_separation);
-  read(p, "max_separation_gap_m", o.projector.max_separation_gap_m);
-  read(p, "mesh_raster", o.projector.mesh_raster);
-  read(n["corridor"], "half_width_m", o.accumulator.corridor.half_width_m);
-  read(n["corridor"], "mask_cell_m", o.accumulator.corridor.mask_cell_m);
-  read(n["corridor"], "include_rois", o.accumulator.corridor.include_rois);
-  read(n, "history_s", o.accumulator.history_s);
-  const YAML::Node l = n["lidar"];
-  read(l, "enabled", o.use_lidar);
-  read(l, "async", o.async_mesh);
-  read(l, "max_mesh_age_s", o.max_mesh_age_s);
-  read(l, "mesh_wait_s", o.mesh_wait_s);
-  read(l, "mesh_history_s", o.mesh_history_s);
-  read(l, "max_edge_m", o.ground.max_edge_m);
-  read(l, "max_range_m", o.ground.max_range_m);
-  read(l, "decimate_m", o.ground.decimate_m);
-  read(l, "index_cell_m", o.ground.index.cell_m);
-  if (l) readGround(l["ground"], o.ground.extraction);
-  read(n["poses"], "keep_s", o.pose_keep_s);
-  read(n["poses"], "max_gap_s", o.max_pose_gap_s);
-  read(n["poses"], "time_jump_s", o.time_jump_s);
-  read(n, "max_pending_frames", o.max_pending_frames);
-  read(n, "close_delay_s", o.close_delay_s);
-  if (!(o.projector.max_range_m > 0.0) || !(o.ground.index.cell_m > 0.0) || !(o.pose_keep_s > 0.0)) {
-    throw std::runtime_error("bev_builder config: projection.max_range_m, lidar.index_cell_m, poses.keep_s must be > 0");
-  }
+  const auto p = n.section("projection");
+  p.read("max_range_m", o.projector.max_range_m);
+  p.read("sample_spacing_m", o.projector.sample_spacing_m);
+  p.read("lane_separation", o.projector.lane_separation);
+  p.read("max_separation_gap_m", o.projector.max_separation_gap_m);
+  p.read("mesh_raster", o.projector.mesh_raster);
+  const auto corridor = n.section("corridor");
+  corridor.read("half_width_m", o.accumulator.corridor.half_width_m);
+  corridor.read("mask_cell_m", o.accumulator.corridor.mask_cell_m);
+  corridor.read("include_rois", o.accumulator.corridor.include_rois);
+  n.read("history_s", o.accumulator.history_s);
+  const auto l = n.section("lidar");
+  l.read("enabled", o.use_lidar);
+  l.read("async", o.async_mesh);
+  l.read("max_mesh_age_s", o.max_mesh_age_s);
+  l.read("mesh_wait_s", o.mesh_wait_s);
+  l.read("mesh_history_s", o.mesh_history_s);
+  l.read("max_edge_m", o.ground.max_edge_m);
+  l.read("max_range_m", o.ground.max_range_m);
+  l.read("decimate_m", o.ground.decimate_m);
+  l.read("index_cell_m", o.ground.index.cell_m);
+  readGround(l.section("ground"), o.ground.extraction);
+  const auto poses = n.section("poses");
+  poses.read("keep_s", o.pose_keep_s);
+  poses.read("max_gap_s", o.max_pose_gap_s);
+  poses.read("time_jump_s", o.time_jump_s);
+  n.read("max_pending_frames", o.max_pending_frames);
+  n.read("close_delay_s", o.close_delay_s);
+  if (!(o.projector.max_range_m > 0.0)) p.fail("max_range_m", "must be > 0");
+  if (!(o.ground.index.cell_m > 0.0)) l.fail("index_cell_m", "must be > 0");
+  if (!(o.pose_keep_s > 0.0)) poses.fail("keep_s", "must be > 0");
+  if (!(o.accumulator.grid.resolution_m > 0.0)) grid.fail("resolution_m", "must be > 0");
   return o;
 }
 

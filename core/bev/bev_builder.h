@@ -57,6 +57,7 @@
 #include <vector>
 
 namespace YAML { class Node; }
+namespace lanemap::config { class YamlReader; }
 
 namespace lanemap::bev {
 
@@ -79,9 +80,12 @@ struct BevBuilderOptions {
   double close_delay_s = 0.3;      // a closed road is handed over when poses are this far past it
   Eigen::Isometry3d lidar_to_vehicle = Eigen::Isometry3d::Identity();
 
-  // From config/bev_builder.yaml's keys (all optional; see that file). Throws std::runtime_error
-  // naming a bad value.
+  // From config/bev_builder.yaml's keys (all optional; see that file). An unknown key inside its
+  // sections (grid, projection, corridor, lidar, poses) or a bad value throws config::ConfigError
+  // naming the key; the top level's other keys are the process's (lanemap-bev-builder checks them).
   static BevBuilderOptions fromYaml(const YAML::Node& node);
+  // The same from a config reader; the caller's finish() refuses unknown keys everywhere.
+  static BevBuilderOptions fromYaml(const config::YamlReader& r);
 };
 
 struct BevBuilderStats {

@@ -1,6 +1,8 @@
 // Pinhole + OpenCV distortion camera model: projection, exact undistortion, YAML loading.
 #include "core/camera/camera_model.h"
 
+#include "core/config/yaml_reader.h"
+
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -11,24 +13,6 @@ namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
 constexpr double kMinDepth = 1e-9;
-
-template <typename T>
-T requiredKey(const YAML::Node& node, const std::string& key, const std::string& context) {
-  if (!node || !node.IsMap()) throw CameraModelError(context + ": expected a map with key '" + key + "'");
-  const YAML::Node value = node[key];
-  if (!value) throw CameraModelError(context + ": missing key '" + key + "'");
-  try {
-    return value.as<T>();
-  } catch (const YAML::Exception& e) {
-    throw CameraModelError(context + ": key '" + key + "' has a bad value: " + e.what());
-  }
-}
-
-template <typename T>
-T optionalKey(const YAML::Node& node, const std::string& key, T fallback, const std::string& context) {
-  if (!node || !node.IsMap() || !node[key]) return fallback;
-  return requiredKey<T>(node, key, context);
-}
 
 // Radial factor r(x) = 1 + k1 r^2 + k2 r^4 + k3 r^6 and d r(x) / d(r^2).
 void radial(const Distortion& d, double r2, double* factor, double* dfactor_dr2) {
@@ -70,12 +54,24 @@ Eigen::Matrix3d bodyFromOptical() {
 }
 
 Eigen::Isometry3d mountFromYaml(const YAML::Node& node, const std::string& context) {
-  const double x = requiredKey<double>(node, "x", context);
-  const double y = requiredKey<double>(node, "y", context);
-  const double z = requiredKey<double>(node, "z", context);
-  const double roll = optionalKey<double>(node, "roll_deg", 0.0, context) * kDegToRad;
-  const double pitch = optionalKey<double>(node, "pitch_deg", 0.0, context) * kDegToRad;
-  const double yaw = optionalKey<double>(node, "yaw_deg", 0.0, context) * kDegToRad;
+  try {
+    const config::YamlReader r(node);
+    const Eigen::Isometry3d pose = mountFromYaml(r);
+    r.finish();
+    return pose;
+  } catch (const config::ConfigError& e) {
+    throw CameraModelError(context + ": " + e.what());
+  }
+}
+
+Eigen::Isometry3d mountFromYaml(const config::YamlReader& r) {
+  if (!r.present()) r.failHere("a mount {x, y, z, roll_deg, pitch_deg, yaw_deg} is required");
+  const double x = r.required<double>("x");
+  const double y = r.required<double>("y");
+  const double z = r.required<double>("z");
+  const double roll = r.get<double>("roll_deg", 0.0) * kDegToRad;
+  const double pitch = r.get<double>("pitch_deg", 0.0) * kDegToRad;
+  const double yaw = r.get<double>("yaw_deg", 0.0) * kDegToRad;
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
                    Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
@@ -103,55 +99,64 @@ CameraModel::CameraModel(const Intrinsics& intrinsics, const Distortion& distort
 }
 
 CameraModel CameraModel::fromYaml(const YAML::Node& node) {
-  const std::string ctx = "camera";
+  try {
+    const config::YamlReader r(node);
+    CameraModel m = fromYaml(r);
+    r.finishSections();  // the camera node also holds the simulator's keys (jpeg_quality, ...)
+    return m;
+  } catch (const config::ConfigError& e) {
+    throw CameraModelError(e.what());
+  }
+}
+
+CameraModel CameraModel::fromYaml(const config::YamlReader& r) {
+  if (!r.present()) r.failHere("the camera {width, height, fx, fy, cx, cy, distortion, mount} is required");
   Intrinsics in;
-  in.width = requiredKey<int>(node, "width", ctx);
-  in.height = requiredKey<int>(node, "height", ctx);
-  in.fx = requiredKey<double>(node, "fx", ctx);
-  in.fy = requiredKey<double>(node, "fy", ctx);
-  in.cx = requiredKey<double>(node, "cx", ctx);
-  in.cy = requiredKey<double>(node, "cy", ctx);
+  in.width = r.required<int>("width");
+  in.height = r.required<int>("height");
+  in.fx = r.required<double>("fx");
+  in.fy = r.required<double>("fy");
+  in.cx = r.required<double>("cx");
+  in.cy = r.required<double>("cy");
   Distortion d;
-  if (const YAML::Node dn = node["distortion"]; dn && dn.IsSequence()) {
+  if (const YAML::Node dn = r.raw("distortion"); dn.IsDefined() && dn.IsSequence()) {
     // OpenCV's order [k1, k2, p1, p2(, k3)].
-    if (dn.size() != 4 && dn.size() != 5)
-      throw CameraModelError(ctx + ".distortion: expected 4 or 5 coefficients, got " + std::to_string(dn.size()));
+    if (dn.size() != 4 && dn.size() != 5) r.fail("distortion", "must have 4 or 5 coefficients, not " + std::to_string(dn.size()));
     double* coeffs[5] = {&d.k1, &d.k2, &d.p1, &d.p2, &d.k3};
     for (size_t i = 0; i < dn.size(); ++i) {
       try {
         *coeffs[i] = dn[i].as<double>();
-      } catch (const YAML::Exception& e) {
-        throw CameraModelError(ctx + ".distortion[" + std::to_string(i) + "] is not a number");
+      } catch (const YAML::Exception&) {
+        r.fail("distortion", "entry " + std::to_string(i) + " is not a number");
       }
     }
-  } else if (dn) {
-    const std::string dctx = ctx + ".distortion";
-    if (!dn.IsMap()) throw CameraModelError(dctx + ": expected a map {k1, k2, p1, p2, k3} or a list");
-    d.k1 = optionalKey<double>(dn, "k1", 0.0, dctx);
-    d.k2 = optionalKey<double>(dn, "k2", 0.0, dctx);
-    d.p1 = optionalKey<double>(dn, "p1", 0.0, dctx);
-    d.p2 = optionalKey<double>(dn, "p2", 0.0, dctx);
-    d.k3 = optionalKey<double>(dn, "k3", 0.0, dctx);
+  } else {
+    const config::YamlReader dm = r.section("distortion");  // a map {k1, k2, p1, p2, k3}, or absent
+    dm.read("k1", d.k1);
+    dm.read("k2", d.k2);
+    dm.read("p1", d.p1);
+    dm.read("p2", d.p2);
+    dm.read("k3", d.k3);
   }
-  const YAML::Node mount = node["mount"];
-  if (!mount) throw CameraModelError(ctx + ": missing key 'mount'");
-  Eigen::Isometry3d camera_to_vehicle = mountFromYaml(mount, ctx + ".mount");
+  Eigen::Isometry3d camera_to_vehicle = mountFromYaml(r.section("mount"));
   camera_to_vehicle.linear() = camera_to_vehicle.linear() * bodyFromOptical();
-  return CameraModel(in, d, camera_to_vehicle);
+  try {
+    return CameraModel(in, d, camera_to_vehicle);
+  } catch (const CameraModelError& e) {
+    r.failHere(e.what());
+  }
 }
 
 CameraModel CameraModel::fromYamlFile(const std::string& path, const std::string& key) {
-  YAML::Node root;
   try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::Exception& e) {
-    throw CameraModelError(path + ": cannot read YAML: " + e.what());
-  }
-  if (!root[key]) throw CameraModelError(path + ": missing key '" + key + "'");
-  try {
-    return fromYaml(root[key]);
-  } catch (const CameraModelError& e) {
-    throw CameraModelError(path + ": " + e.what());
+    const auto root = config::YamlReader::loadFile(path);
+    if (!root.has(key)) root.fail(key, "is required");
+    const auto section = root.section(key);
+    CameraModel m = fromYaml(section);
+    section.finishSections();
+    return m;
+  } catch (const config::ConfigError& e) {
+    throw CameraModelError(e.what());
   }
 }
 

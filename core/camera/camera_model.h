@@ -18,6 +18,7 @@
 #include <vector>
 
 namespace YAML { class Node; }
+namespace lanemap::config { class YamlReader; }
 
 namespace lanemap::camera {
 
@@ -45,6 +46,9 @@ struct Distortion {
 // R = Rz(yaw) Ry(pitch) Rx(roll); positive pitch turns the nose DOWN). Missing angles default to 0;
 // missing x/y/z throw CameraModelError naming `context`.
 Eigen::Isometry3d mountFromYaml(const YAML::Node& node, const std::string& context);
+// The same from a config section (strict: x, y, z required, no other keys but the angles, once the
+// caller's finish() runs); errors are config::ConfigError naming the file and key.
+Eigen::Isometry3d mountFromYaml(const config::YamlReader& r);
 
 // Rotation from OpenCV's camera frame to a camera body frame (x forward, y left, z up):
 // body = kBodyFromOptical * optical.
@@ -61,6 +65,10 @@ class CameraModel {
   // distortion {k1, k2, p1, p2, k3} or [k1, k2, p1, p2(, k3)] (optional, zeros), mount {x, y, z, roll_deg, pitch_deg, yaw_deg}
   // (the camera body frame x forward/y left/z up; the optical frame follows by bodyFromOptical()).
   static CameraModel fromYaml(const YAML::Node& camera_node);
+  // The same from a config section (config/vehicle.yaml `camera:`); the keys other than the ones
+  // above are the caller's (core/config/vehicle_config.h reads the whole file strictly). Throws
+  // config::ConfigError naming the file and key.
+  static CameraModel fromYaml(const config::YamlReader& r);
   // Loads `path` (a vehicle YAML) and reads its `key` node; errors name the file.
   static CameraModel fromYamlFile(const std::string& path, const std::string& key = "camera");
 

@@ -1,6 +1,7 @@
 // Intersection topology and lanelets (see intersections.h).
 #include "core/intersections/intersections.h"
 
+#include "core/config/yaml_reader.h"
 #include "core/io/lanelet2.h"
 
 #include <algorithm>
@@ -477,38 +478,42 @@ std::vector<Movements> turnLanes(const skeleton::AtomicRoad& road) {
 }
 
 IntersectionOptions IntersectionOptions::fromYaml(const YAML::Node& node) {
-  IntersectionOptions o;
-  if (!node || node.IsNull()) return o;
-  if (!node.IsMap()) throw IntersectionsError("intersections options: expected a map");
   try {
-    for (const auto& kv : node) {
-      const std::string k = kv.first.as<std::string>();
-      const YAML::Node& v = kv.second;
-      if (k == "right_hand_traffic") o.right_hand_traffic = v.as<bool>();
-      else if (k == "allow_u_turns") o.allow_u_turns = v.as<bool>();
-      else if (k == "use_turn_lanes") o.use_turn_lanes = v.as<bool>();
-      else if (k == "use_restrictions") o.use_restrictions = v.as<bool>();
-      else if (k == "pockets_are_turn_lanes") o.pockets_are_turn_lanes = v.as<bool>();
-      else if (k == "connect_orphan_lanes") o.connect_orphan_lanes = v.as<bool>();
-      else if (k == "straight_max_deg") o.straight_max_deg = v.as<double>();
-      else if (k == "uturn_min_deg") o.uturn_min_deg = v.as<double>();
-      else if (k == "end_tolerance_m") o.end_tolerance_m = v.as<double>();
-      else if (k == "unseen_end_m") o.unseen_end_m = v.as<double>();
-      else if (k == "lane_tangent_m") o.lane_tangent_m = v.as<double>();
-      else if (k == "road_tangent_m") o.road_tangent_m = v.as<double>();
-      else if (k == "pocket_min_m") o.pocket_min_m = v.as<double>();
-      else if (k == "parallel_deg") o.curve.parallel_deg = v.as<double>();
-      else if (k == "min_control_fraction") o.curve.min_control_fraction = v.as<double>();
-      else if (k == "max_control_fraction") o.curve.max_control_fraction = v.as<double>();
-      else if (k == "cubic_handle_fraction") o.curve.cubic_handle_fraction = v.as<double>();
-      else if (k == "step_m") o.curve.step_m = v.as<double>();
-      else if (k == "id_base") o.id_base = v.as<int64_t>();
-      else throw IntersectionsError("intersections options: unknown key '" + k + "'");
-    }
-  } catch (const YAML::Exception& e) {
-    throw IntersectionsError(std::string("intersections options: ") + e.what());
+    const config::YamlReader r(node);
+    IntersectionOptions o = fromYaml(r);
+    r.finish();
+    return o;
+  } catch (const config::ConfigError& e) {
+    throw IntersectionsError(e.what());
   }
-  o.validate();
+}
+
+IntersectionOptions IntersectionOptions::fromYaml(const config::YamlReader& r) {
+  IntersectionOptions o;
+  r.read("right_hand_traffic", o.right_hand_traffic);
+  r.read("allow_u_turns", o.allow_u_turns);
+  r.read("use_turn_lanes", o.use_turn_lanes);
+  r.read("use_restrictions", o.use_restrictions);
+  r.read("pockets_are_turn_lanes", o.pockets_are_turn_lanes);
+  r.read("connect_orphan_lanes", o.connect_orphan_lanes);
+  r.read("straight_max_deg", o.straight_max_deg);
+  r.read("uturn_min_deg", o.uturn_min_deg);
+  r.read("end_tolerance_m", o.end_tolerance_m);
+  r.read("unseen_end_m", o.unseen_end_m);
+  r.read("lane_tangent_m", o.lane_tangent_m);
+  r.read("road_tangent_m", o.road_tangent_m);
+  r.read("pocket_min_m", o.pocket_min_m);
+  r.read("parallel_deg", o.curve.parallel_deg);
+  r.read("min_control_fraction", o.curve.min_control_fraction);
+  r.read("max_control_fraction", o.curve.max_control_fraction);
+  r.read("cubic_handle_fraction", o.curve.cubic_handle_fraction);
+  r.read("step_m", o.curve.step_m);
+  r.read("id_base", o.id_base);
+  try {
+    o.validate();
+  } catch (const IntersectionsError& e) {
+    r.failHere(e.what());
+  }
   return o;
 }
 

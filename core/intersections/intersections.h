@@ -39,6 +39,8 @@
 #include <utility>
 #include <vector>
 
+namespace lanemap::config { class YamlReader; }
+
 namespace lanemap::intersections {
 
 class IntersectionsError : public std::runtime_error {
@@ -70,6 +72,9 @@ struct IntersectionOptions {
   int64_t id_base = 0;
 
   static IntersectionOptions fromYaml(const YAML::Node& node);  // throws IntersectionsError
+  // From a config (config/intersections.yaml; strict: the caller's finish() refuses other keys);
+  // throws config::ConfigError naming the file and key.
+  static IntersectionOptions fromYaml(const config::YamlReader& r);
   void validate() const;                                         // throws IntersectionsError
 };
 

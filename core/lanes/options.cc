@@ -1,79 +1,73 @@
 #include "core/lanes/options.h"
 
+#include "core/config/yaml_reader.h"
+
 #include <cmath>
-#include <set>
 #include <string>
 
 namespace lanemap::lanes {
 
-namespace {
-
-template <typename T>
-void read(const YAML::Node& n, const char* key, T& v, std::set<std::string>& seen) {
-  seen.insert(key);
-  if (!n[key]) return;
+ExplorerOptions ExplorerOptions::fromYaml(const YAML::Node& n) {
   try {
-    v = n[key].as<T>();
-  } catch (const YAML::Exception& e) {
-    throw LanesError(std::string("lane explorer option `") + key + "`: " + e.what());
+    const config::YamlReader r(n);
+    ExplorerOptions o = fromYaml(r);
+    r.finish();
+    return o;
+  } catch (const config::ConfigError& e) {
+    throw LanesError(e.what());
   }
 }
 
-}  // namespace
-
-ExplorerOptions ExplorerOptions::fromYaml(const YAML::Node& n) {
+ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   ExplorerOptions o;
-  if (!n || n.IsNull()) return o;
-  if (!n.IsMap()) throw LanesError("lane explorer options must be a YAML map");
-  std::set<std::string> k;
-  read(n, "num_particles", o.num_particles, k);
-  read(n, "footprint_length_m", o.footprint_length_m, k);
-  read(n, "footprint_width_m", o.footprint_width_m, k);
-  read(n, "v_min", o.v_min, k);
-  read(n, "v_max", o.v_max, k);
-  read(n, "w_min", o.w_min, k);
-  read(n, "w_max", o.w_max, k);
-  read(n, "dt_s", o.dt_s, k);
-  read(n, "max_heading_rad", o.max_heading_rad, k);
-  read(n, "seed", o.seed, k);
-  read(n, "marking_fraction", o.marking_fraction, k);
-  read(n, "separation_fraction", o.separation_fraction, k);
-  read(n, "drivable_fraction", o.drivable_fraction, k);
-  read(n, "drivable_min_count", o.drivable_min_count, k);
-  read(n, "min_observations", o.min_observations, k);
-  read(n, "corridor_half_width_m", o.corridor_half_width_m, k);
-  read(n, "frame_spacing_m", o.frame_spacing_m, k);
-  read(n, "frame_smoothing_m", o.frame_smoothing_m, k);
-  read(n, "right_hand_traffic", o.right_hand_traffic, k);
-  read(n, "divider_search_m", o.divider_search_m, k);
-  read(n, "divider_bin_m", o.divider_bin_m, k);
-  read(n, "carriageway_wall_m", o.carriageway_wall_m, k);
-  read(n, "unnamed_lanes", o.unnamed_lanes, k);
-  read(n, "lane_width_min_m", o.lane_width_min_m, k);
-  read(n, "lane_width_max_m", o.lane_width_max_m, k);
-  read(n, "birth_every_m", o.birth_every_m, k);
-  read(n, "birth_min_free_m", o.birth_min_free_m, k);
-  read(n, "birth_min_evidence", o.birth_min_evidence, k);
-  read(n, "birth_particles", o.birth_particles, k);
-  read(n, "dbscan_eps_m", o.dbscan_eps_m, k);
-  read(n, "dbscan_min_points", o.dbscan_min_points, k);
-  read(n, "track_tolerance_m", o.track_tolerance_m, k);
-  read(n, "lane_gap_max_m", o.lane_gap_max_m, k);
-  read(n, "same_lane_m", o.same_lane_m, k);
-  read(n, "min_lane_length_m", o.min_lane_length_m, k);
-  read(n, "short_road_min_m", o.short_road_min_m, k);
-  read(n, "split_neighbour_m", o.split_neighbour_m, k);
-  read(n, "bin_m", o.bin_m, k);
-  read(n, "break_spacing_m", o.break_spacing_m, k);
-  read(n, "break_penalty_m2", o.break_penalty_m2, k);
-  read(n, "waypoint_spacing_m", o.waypoint_spacing_m, k);
-  read(n, "probe_max_m", o.probe_max_m, k);
-  read(n, "default_half_width_m", o.default_half_width_m, k);
-  for (const auto& kv : n) {
-    const std::string key = kv.first.as<std::string>();
-    if (!k.count(key)) throw LanesError("unknown lane explorer option `" + key + "`");
+  r.read("num_particles", o.num_particles);
+  r.read("footprint_length_m", o.footprint_length_m);
+  r.read("footprint_width_m", o.footprint_width_m);
+  r.read("v_min", o.v_min);
+  r.read("v_max", o.v_max);
+  r.read("w_min", o.w_min);
+  r.read("w_max", o.w_max);
+  r.read("dt_s", o.dt_s);
+  r.read("max_heading_rad", o.max_heading_rad);
+  r.read("seed", o.seed);
+  r.read("marking_fraction", o.marking_fraction);
+  r.read("separation_fraction", o.separation_fraction);
+  r.read("drivable_fraction", o.drivable_fraction);
+  r.read("drivable_min_count", o.drivable_min_count);
+  r.read("min_observations", o.min_observations);
+  r.read("corridor_half_width_m", o.corridor_half_width_m);
+  r.read("frame_spacing_m", o.frame_spacing_m);
+  r.read("frame_smoothing_m", o.frame_smoothing_m);
+  r.read("right_hand_traffic", o.right_hand_traffic);
+  r.read("divider_search_m", o.divider_search_m);
+  r.read("divider_bin_m", o.divider_bin_m);
+  r.read("carriageway_wall_m", o.carriageway_wall_m);
+  r.read("unnamed_lanes", o.unnamed_lanes);
+  r.read("lane_width_min_m", o.lane_width_min_m);
+  r.read("lane_width_max_m", o.lane_width_max_m);
+  r.read("birth_every_m", o.birth_every_m);
+  r.read("birth_min_free_m", o.birth_min_free_m);
+  r.read("birth_min_evidence", o.birth_min_evidence);
+  r.read("birth_particles", o.birth_particles);
+  r.read("dbscan_eps_m", o.dbscan_eps_m);
+  r.read("dbscan_min_points", o.dbscan_min_points);
+  r.read("track_tolerance_m", o.track_tolerance_m);
+  r.read("lane_gap_max_m", o.lane_gap_max_m);
+  r.read("same_lane_m", o.same_lane_m);
+  r.read("min_lane_length_m", o.min_lane_length_m);
+  r.read("short_road_min_m", o.short_road_min_m);
+  r.read("split_neighbour_m", o.split_neighbour_m);
+  r.read("bin_m", o.bin_m);
+  r.read("break_spacing_m", o.break_spacing_m);
+  r.read("break_penalty_m2", o.break_penalty_m2);
+  r.read("waypoint_spacing_m", o.waypoint_spacing_m);
+  r.read("probe_max_m", o.probe_max_m);
+  r.read("default_half_width_m", o.default_half_width_m);
+  try {
+    o.validate();
+  } catch (const LanesError& e) {
+    r.failHere(e.what());
   }
-  o.validate();
   return o;
 }
 

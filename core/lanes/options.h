@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <stdexcept>
 
+namespace lanemap::config { class YamlReader; }
+
 namespace lanemap::lanes {
 
 class LanesError : public std::runtime_error {
@@ -83,6 +85,9 @@ struct ExplorerOptions {
   double default_half_width_m = 1.75;    // bound where probing finds nothing
 
   static ExplorerOptions fromYaml(const YAML::Node& node);  // throws LanesError
+  // From the `explorer:` section of a config (strict: the caller's finish() refuses other keys);
+  // throws config::ConfigError naming the file and key.
+  static ExplorerOptions fromYaml(const config::YamlReader& r);
   void validate() const;                                    // throws LanesError
 };
 

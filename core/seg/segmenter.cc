@@ -1,5 +1,6 @@
 #include "core/seg/segmenter.h"
 
+#include "core/config/yaml_reader.h"
 #include "core/io/image_header.h"
 
 #include <opencv2/dnn.hpp>
@@ -20,26 +21,16 @@ namespace {
 
 constexpr int kLanemapClasses = 11;
 
-template <typename T>
-T get(const YAML::Node& node, const char* key, T fallback) {
-  if (!node[key]) return fallback;
-  try {
-    return node[key].as<T>();
-  } catch (const YAML::Exception& e) {
-    throw ModelError(std::string("model config: key '") + key + "': " + e.what());
-  }
-}
-
-std::array<double, 3> triple(const YAML::Node& node, const char* key, std::array<double, 3> fallback) {
-  if (!node[key]) return fallback;
-  const YAML::Node v = node[key];
+// "mean: 0.5" or "mean: [0.5, 0.4, 0.3]".
+std::array<double, 3> triple(const config::YamlReader& r, const char* key, std::array<double, 3> fallback) {
+  const YAML::Node v = r.raw(key);
+  if (!v.IsDefined() || v.IsNull()) return fallback;
   if (v.IsScalar()) {
-    const double x = get<double>(node, key, 0.0);
+    const double x = r.get<double>(key, 0.0);
     return {x, x, x};
   }
-  if (!v.IsSequence() || v.size() != 3) throw ModelError(std::string("model config: '") + key + "' must be 3 numbers");
   std::array<double, 3> out{};
-  for (size_t i = 0; i < 3; ++i) out[i] = v[i].as<double>();
+  if (!v.IsSequence() || v.size() != 3 || !r.read(key, out)) r.fail(key, "must be 3 numbers (or one for all three)");
   return out;
 }
 
@@ -56,48 +47,49 @@ ModelConfig ModelConfig::fromSegmenterConfig(const YAML::Node& config, const std
 }
 
 ModelConfig ModelConfig::fromYaml(const YAML::Node& node, const std::string& base_dir) {
-  if (!node || !node.IsMap()) throw ModelError("model config: expected a map with at least 'path'");
-  static const char* kKeys[] = {"path", "name", "input_width", "input_height", "crop_top", "rgb", "scale", "mean",
-                                "std", "output", "class_map", "upsample"};
-  for (const auto& kv : node) {
-    const std::string k = kv.first.as<std::string>();
-    bool known = false;
-    for (const char* key : kKeys) known = known || k == key;
-    if (!known) throw ModelError("model config: unknown key '" + k + "'");
+  try {
+    const config::YamlReader r(node);
+    if (!r.present()) r.failHere("expected a map with at least 'path'");
+    ModelConfig c = fromYaml(r, base_dir);
+    r.finish();
+    return c;
+  } catch (const config::ConfigError& e) {
+    throw ModelError(std::string("model config: ") + e.what());
   }
+}
+
+ModelConfig ModelConfig::fromYaml(const config::YamlReader& r, const std::string& base_dir, const std::string& model_path) {
   ModelConfig c;
-  c.path = get<std::string>(node, "path", "");
-  if (c.path.empty()) throw ModelError("model config: 'path' (the ONNX file) is required");
+  c.path = model_path.empty() ? r.get<std::string>("path", "") : model_path;
+  if (!model_path.empty()) r.allow({"path"});  // replaced
+  if (c.path.empty()) r.fail("path", "(the ONNX file) is required");
   if (!base_dir.empty() && fs::path(c.path).is_relative() && !fs::exists(c.path) &&
       fs::exists(fs::path(base_dir) / c.path)) {
     c.path = (fs::path(base_dir) / c.path).lexically_normal().string();
   }
-  c.name = get<std::string>(node, "name", fs::path(c.path).stem().string());
-  c.input_width = get<int>(node, "input_width", c.input_width);
-  c.input_height = get<int>(node, "input_height", c.input_height);
+  c.name = r.get<std::string>("name", fs::path(c.path).stem().string());
+  r.read("input_width", c.input_width);
+  r.read("input_height", c.input_height);
   if (c.input_width < 8 || c.input_height < 8 || c.input_width > 8192 || c.input_height > 8192)
-    throw ModelError("model config: input_width/input_height must be in [8, 8192]");
-  c.crop_top = get<int>(node, "crop_top", c.crop_top);
-  if (c.crop_top < 0 || c.crop_top > 8192) throw ModelError("model config: crop_top must be in [0, 8192] rows");
-  c.rgb = get<bool>(node, "rgb", c.rgb);
-  c.scale = get<double>(node, "scale", c.scale);
-  c.mean = triple(node, "mean", c.mean);
-  c.std = triple(node, "std", c.std);
+    r.failHere("input_width/input_height must be in [8, 8192]");
+  if (r.read("crop_top", c.crop_top) && (c.crop_top < 0 || c.crop_top > 8192)) r.fail("crop_top", "must be in [0, 8192] rows");
+  r.read("rgb", c.rgb);
+  r.read("scale", c.scale);
+  c.mean = triple(r, "mean", c.mean);
+  c.std = triple(r, "std", c.std);
   for (double s : c.std)
-    if (!(std::abs(s) > 1e-12)) throw ModelError("model config: 'std' entries must be non-zero");
-  const std::string output = get<std::string>(node, "output", "scores");
+    if (!(std::abs(s) > 1e-12)) r.fail("std", "entries must be non-zero");
+  const std::string output = r.get<std::string>("output", "scores");
   if (output == "scores") c.output = Output::kScores;
   else if (output == "labels") c.output = Output::kLabels;
-  else throw ModelError("model config: 'output' must be scores or labels, not '" + output + "'");
-  if (node["class_map"]) {
-    if (!node["class_map"].IsSequence()) throw ModelError("model config: 'class_map' must be a list of class ids");
-    for (const auto& v : node["class_map"]) c.class_map.push_back(v.as<int>());
-    if (c.class_map.empty() || c.class_map.size() > 256) throw ModelError("model config: 'class_map' must have 1..256 entries");
+  else r.fail("output", "must be scores or labels, not '" + output + "'");
+  if (r.read("class_map", c.class_map) && (c.class_map.empty() || c.class_map.size() > 256)) {
+    r.fail("class_map", "must have 1..256 entries");
   }
-  const std::string up = get<std::string>(node, "upsample", "scores");
+  const std::string up = r.get<std::string>("upsample", "scores");
   if (up == "scores") c.upsample_scores = true;
   else if (up == "labels") c.upsample_scores = false;
-  else throw ModelError("model config: 'upsample' must be scores or labels, not '" + up + "'");
+  else r.fail("upsample", "must be scores or labels, not '" + up + "'");
   return c;
 }
 

@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+namespace lanemap::config { class YamlReader; }
+
 namespace lanemap::seg {
 
 // A model that cannot be used (missing file, not ONNX, wrong output shape) or a bad config.
@@ -55,6 +57,10 @@ struct ModelConfig {
   // class_map, upsample (scores|labels). Relative paths resolve against base_dir (if not empty)
   // when the file is not found as given. Throws ModelError naming the key.
   static ModelConfig fromYaml(const YAML::Node& node, const std::string& base_dir = "");
+  // The same from a config section (config/segmenter.yaml `model:`), `model_path` (when not empty)
+  // instead of its path; errors are config::ConfigError naming the file and key.
+  static ModelConfig fromYaml(const config::YamlReader& r, const std::string& base_dir = "",
+                              const std::string& model_path = "");
   // The `model:` block of a segmenter config (config/segmenter.yaml), its path replaced by
   // `model_path` when that is not empty (the name then defaults to the new file's stem unless the
   // config names the model): how lanemap-segmenter and lanemap-offline load the configured model.

@@ -1,5 +1,7 @@
 #include "core/sim/drive.h"
 
+#include "core/config/yaml_reader.h"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -322,20 +324,22 @@ std::vector<LanePlan::Leg> planLanes(const LaneGraph& g, const std::vector<int64
 }  // namespace
 
 DriveOptions DriveOptions::fromYaml(const YAML::Node& n) {
+  const config::YamlReader r(n);
+  DriveOptions o = fromYaml(r);
+  r.finish();
+  return o;
+}
+
+DriveOptions DriveOptions::fromYaml(const config::YamlReader& r) {
   DriveOptions o;
-  if (!n) return o;
-  auto get = [&n](const char* key, double& v) {
-    if (n[key]) v = n[key].as<double>();
-  };
-  get("cruise_speed_mps", o.cruise_speed_mps);
-  get("max_lateral_accel", o.max_lateral_accel);
-  get("accel", o.accel);
-  get("lane_change_length_m", o.lane_change_length_m);
-  get("lane_change_probability", o.lane_change_probability);
+  r.read("cruise_speed_mps", o.cruise_speed_mps);
+  r.read("max_lateral_accel", o.max_lateral_accel);
+  r.read("accel", o.accel);
+  r.read("lane_change_length_m", o.lane_change_length_m);
+  r.read("lane_change_probability", o.lane_change_probability);
   if (o.cruise_speed_mps <= 0 || o.accel <= 0 || o.max_lateral_accel <= 0 || o.lane_change_length_m <= 0 ||
       o.lane_change_probability < 0 || o.lane_change_probability >= 1) {
-    throw std::runtime_error("drive config: speeds, accelerations and lengths must be > 0, "
-                             "lane_change_probability in [0, 1)");
+    r.failHere("speeds, accelerations and lengths must be > 0, lane_change_probability in [0, 1)");
   }
   return o;
 }

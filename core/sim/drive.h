@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+namespace lanemap::config { class YamlReader; }
+
 namespace lanemap::sim {
 
 class RouteError : public std::runtime_error {
@@ -37,7 +39,9 @@ struct DriveOptions {
   std::vector<int64_t> route_nodes;  // intersection ids to pass through, in order; empty: auto
 
   // Reads the keys present in a `drive` node (config/sim_drive.yaml); others keep their defaults.
+  // An unknown key or a bad value throws config::ConfigError naming it.
   static DriveOptions fromYaml(const YAML::Node& node);
+  static DriveOptions fromYaml(const config::YamlReader& r);  // the caller's finish() checks the keys
 };
 
 // One sample of the car's true motion. The vehicle frame: x forward, y left, z up, origin at the

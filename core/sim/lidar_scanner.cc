@@ -2,6 +2,7 @@
 #include "core/sim/lidar_scanner.h"
 
 #include "core/camera/camera_model.h"  // mountFromYaml
+#include "core/config/yaml_reader.h"
 
 #include <opencv2/core/utility.hpp>
 #include <yaml-cpp/yaml.h>
@@ -21,16 +22,6 @@ uint64_t mix64(uint64_t x) {  // splitmix64 finaliser
   x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
   x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
   return x ^ (x >> 31);
-}
-
-template <typename T>
-T optionalKey(const YAML::Node& node, const std::string& key, T fallback) {
-  if (!node[key]) return fallback;
-  try {
-    return node[key].as<T>();
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error("lidar: key '" + key + "' has a bad value: " + e.what());
-  }
 }
 
 const LidarScannerOptions& validate(const LidarScannerOptions& o) {
@@ -56,39 +47,53 @@ Eigen::Vector3d laserDirection(double azimuth_deg, double elevation_deg) {
 
 }  // namespace
 
-LidarScannerOptions LidarScannerOptions::fromYaml(const YAML::Node& node) {
-  if (!node || !node.IsMap()) throw std::runtime_error("lidar: expected a map");
+namespace {
+
+// The keys of a `lidar:` section, unchecked. The simulator (the YAML::Node form) simulates a VLP-16
+// only; a vehicle file read whole (core/config/vehicle_config.h) may name another model.
+LidarScannerOptions readLidarKeys(const config::YamlReader& r, bool vlp16_only) {
+  if (!r.present()) r.failHere("the lidar {model, rpm, ..., mount} is required");
   LidarScannerOptions o;
-  if (node["model"] && node["model"].as<std::string>() != "VLP-16")
-    throw std::runtime_error("lidar: model '" + node["model"].as<std::string>() +
-                             "' is not simulated (only VLP-16)");
-  o.rpm = optionalKey<double>(node, "rpm", o.rpm);
-  o.max_range_m = optionalKey<double>(node, "max_range_m", o.max_range_m);
-  o.min_range_m = optionalKey<double>(node, "min_range_m", o.min_range_m);
-  o.range_noise_m = optionalKey<double>(node, "range_noise_m", o.range_noise_m);
-  o.intensity_noise = optionalKey<double>(node, "intensity_noise", o.intensity_noise);
-  const int product = optionalKey<int>(node, "product_id", o.product_id);
-  if (product < 0 || product > 255) throw std::runtime_error("lidar: product_id must be a byte");
+  const std::string model = r.get<std::string>("model", "VLP-16");
+  if (vlp16_only && model != "VLP-16") r.fail("model", "'" + model + "' is not simulated (only VLP-16)");
+  r.read("rpm", o.rpm);
+  r.read("max_range_m", o.max_range_m);
+  r.read("min_range_m", o.min_range_m);
+  r.read("range_noise_m", o.range_noise_m);
+  r.read("intensity_noise", o.intensity_noise);
+  int product = o.product_id;
+  if (r.read("product_id", product) && (product < 0 || product > 255)) r.fail("product_id", "must be a byte (0-255)");
   o.product_id = static_cast<uint8_t>(product);
-  if (!node["mount"]) throw std::runtime_error("lidar: missing key 'mount'");
-  o.mount = camera::mountFromYaml(node["mount"], "lidar.mount");
-  validate(o);
+  o.mount = camera::mountFromYaml(r.section("mount"));
+  return o;
+}
+
+}  // namespace
+
+LidarScannerOptions LidarScannerOptions::fromYaml(const YAML::Node& node) {
+  const config::YamlReader r(node);
+  LidarScannerOptions o = readLidarKeys(r, true);
+  r.finish();
+  return validate(o);  // std::invalid_argument on a bad value
+}
+
+LidarScannerOptions LidarScannerOptions::fromYaml(const config::YamlReader& r) {
+  LidarScannerOptions o = readLidarKeys(r, false);
+  try {
+    validate(o);
+  } catch (const std::invalid_argument& e) {
+    r.failHere(e.what());
+  }
   return o;
 }
 
 LidarScannerOptions LidarScannerOptions::fromYamlFile(const std::string& path, const std::string& key) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(path + ": cannot read YAML: " + e.what());
-  }
-  if (!root[key]) throw std::runtime_error(path + ": missing key '" + key + "'");
-  try {
-    return fromYaml(root[key]);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(path + ": " + e.what());
-  }
+  const auto root = config::YamlReader::loadFile(path);
+  if (!root.has(key)) root.fail(key, "is required");
+  const auto section = root.section(key);
+  LidarScannerOptions o = fromYaml(section);
+  section.finish();
+  return o;
 }
 
 double surfaceIntensity(Surface s) {

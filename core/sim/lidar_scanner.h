@@ -26,6 +26,7 @@
 #include <vector>
 
 namespace YAML { class Node; }
+namespace lanemap::config { class YamlReader; }
 
 namespace lanemap::sim {
 
@@ -40,10 +41,14 @@ struct LidarScannerOptions {
   uint8_t product_id = 0x22;        // packet factory byte (VLP-16)
   RaycastOptions raycast;
 
-  // From the `lidar` node of config/vehicle.yaml (keys rpm, max_range_m, min_range_m,
-  // range_noise_m, intensity_noise, product_id optional; mount required). Throws
-  // std::runtime_error naming the key.
+  // From the `lidar` node of config/vehicle.yaml (keys model (VLP-16), rpm, max_range_m,
+  // min_range_m, range_noise_m, intensity_noise, product_id optional; mount required). Throws
+  // config::ConfigError (a std::runtime_error) naming the key, std::invalid_argument on a value
+  // out of range.
   static LidarScannerOptions fromYaml(const YAML::Node& lidar_node);
+  // The same from a config section, any `model` accepted (a vehicle file read whole); every error
+  // is a config::ConfigError naming file and key.
+  static LidarScannerOptions fromYaml(const config::YamlReader& r);
   static LidarScannerOptions fromYamlFile(const std::string& path, const std::string& key = "lidar");
 };
 

@@ -1,21 +1,28 @@
 #include "core/sim/pose_noise.h"
 
+#include "core/config/yaml_reader.h"
+
 #include <cmath>
 
 namespace lanemap::sim {
 
 PoseNoiseOptions PoseNoiseOptions::fromYaml(const YAML::Node& n) {
+  const config::YamlReader r(n);
+  PoseNoiseOptions o = fromYaml(r);
+  r.finish();
+  return o;
+}
+
+PoseNoiseOptions PoseNoiseOptions::fromYaml(const config::YamlReader& r) {
   PoseNoiseOptions o;
-  if (!n) return o;
-  auto get = [&n](const char* key, double& v) {
-    if (n[key]) v = n[key].as<double>();
-  };
-  get("position_sigma_m", o.position_sigma_m);
-  get("altitude_sigma_m", o.altitude_sigma_m);
-  get("bias_sigma_m", o.bias_sigma_m);
-  get("bias_time_constant_s", o.bias_time_constant_s);
-  get("yaw_sigma_deg", o.yaw_sigma_deg);
-  get("attitude_sigma_deg", o.attitude_sigma_deg);
+  for (const auto& [key, v] : {std::pair<const char*, double*>{"position_sigma_m", &o.position_sigma_m},
+                               {"altitude_sigma_m", &o.altitude_sigma_m},
+                               {"bias_sigma_m", &o.bias_sigma_m},
+                               {"bias_time_constant_s", &o.bias_time_constant_s},
+                               {"yaw_sigma_deg", &o.yaw_sigma_deg},
+                               {"attitude_sigma_deg", &o.attitude_sigma_deg}}) {
+    if (r.read(key, *v) && !(*v >= 0.0)) r.fail(key, "must be >= 0");
+  }
   return o;
 }
 

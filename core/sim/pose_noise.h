@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <random>
 
+namespace lanemap::config { class YamlReader; }
+
 namespace lanemap::sim {
 
 struct PoseNoiseOptions {
@@ -19,6 +21,9 @@ struct PoseNoiseOptions {
   double yaw_sigma_deg = 0.1;
   double attitude_sigma_deg = 0.05;   // roll and pitch
   static PoseNoiseOptions fromYaml(const YAML::Node& node);  // missing keys keep defaults
+  // The same from a config section (config/sim_drive.yaml `pose_noise:`); the caller's finish()
+  // refuses unknown keys. Errors are config::ConfigError naming the file and key.
+  static PoseNoiseOptions fromYaml(const config::YamlReader& r);
 };
 
 struct PoseError {

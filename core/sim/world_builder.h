@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+namespace lanemap::config { class YamlReader; }
+
 namespace lanemap::sim {
 
 class WorldConfigError : public std::runtime_error {
@@ -65,8 +67,11 @@ struct WorldOptions {
   int tile_cache_size = 24;          // tiles kept; older ones are dropped (memory stays flat)
 
   // Reads the keys present (all optional) from a YAML map (config/sim_world.yaml); a null node
-  // gives the defaults. Throws WorldConfigError on a bad value or an unknown key of a section.
+  // gives the defaults. Throws WorldConfigError on a bad value or an unknown key.
   static WorldOptions fromYaml(const YAML::Node& node);
+  // The same from a config reader (the caller's finish() refuses unknown keys); throws
+  // config::ConfigError naming the file and key.
+  static WorldOptions fromYaml(const config::YamlReader& r);
   static WorldOptions fromYamlFile(const std::string& path);
   void validate() const;  // throws WorldConfigError
 };

@@ -2,49 +2,16 @@
 // class default lane widths of an OSM way.
 #include "core/sim/world_builder.h"
 
+#include "core/config/yaml_reader.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
-#include <set>
 #include <sstream>
 
 namespace lanemap::sim {
 
 namespace {
-
-// Reads `key` of a section into v when present; rejects unknown keys of the section.
-class Section {
- public:
-  Section(const YAML::Node& root, const std::string& name)
-      : name_(name), present_(root.IsMap() && root[name] && !root[name].IsNull()),
-        node_(present_ ? root[name] : YAML::Node()) {
-    if (present_ && !node_.IsMap()) throw WorldConfigError("world config: '" + name + "' must be a map");
-  }
-  template <typename T>
-  void get(const std::string& key, T& v) {
-    known_.insert(key);
-    if (!present_ || !node_[key]) return;
-    try {
-      v = node_[key].as<T>();
-    } catch (const YAML::Exception& e) {
-      throw WorldConfigError("world config: bad value for " + name_ + "." + key + ": " + e.what());
-    }
-  }
-  void finish() const {
-    if (!present_) return;
-    for (const auto& kv : node_) {
-      const std::string k = kv.first.as<std::string>();
-      if (!known_.count(k)) throw WorldConfigError("world config: unknown key " + name_ + "." + k);
-    }
-  }
-
- private:
-  std::string name_;
-  bool present_ = false;
-  const YAML::Node node_;
-  std::set<std::string> known_;
-};
 
 int parseCount(const std::string& v) {
   if (v.empty()) return -1;
@@ -74,58 +41,64 @@ int classDefaultPerDirection(const std::string& highway, bool oneway) {
 }  // namespace
 
 WorldOptions WorldOptions::fromYaml(const YAML::Node& node) {
-  WorldOptions o;
-  if (!node || node.IsNull()) return o;
-  if (!node.IsMap()) throw WorldConfigError("world config: the top level must be a map");
   try {
-    if (node["seed"]) o.seed = node["seed"].as<uint64_t>();
-    if (node["flat"]) o.flat = node["flat"].as<bool>();
-    if (node["right_hand_traffic"]) o.right_hand_traffic = node["right_hand_traffic"].as<bool>();
-  } catch (const YAML::Exception& e) {
-    throw WorldConfigError(std::string("world config: bad seed/flat/right_hand_traffic: ") + e.what());
+    const config::YamlReader r(node);
+    WorldOptions o = fromYaml(r);
+    r.finish();
+    return o;
+  } catch (const config::ConfigError& e) {
+    throw WorldConfigError(std::string("world config: ") + e.what());
   }
-  Section lanes(node, "lanes");
-  lanes.get("default_width_m", o.default_lane_width_m);
-  lanes.get("width_jitter_m", o.lane_width_jitter_m);
-  lanes.get("width_min_m", o.lane_width_min_m);
-  lanes.get("width_max_m", o.lane_width_max_m);
-  lanes.finish();
-  Section irr(node, "irregularities");
-  irr.get("parking_lane", o.p_parking_lane);
-  irr.get("bike_lane", o.p_bike_lane);
-  irr.get("bus_bay", o.p_bus_bay);
-  irr.get("turn_pocket", o.p_turn_pocket);
-  irr.get("faded_marking", o.p_faded_marking);
-  irr.get("missing_marking", o.p_missing_marking);
-  irr.get("crosswalk", o.p_crosswalk);
-  irr.get("stop_line", o.p_stop_line);
-  irr.get("sidewalk", o.p_sidewalk);
-  irr.get("parked_car_occupancy", o.parked_car_occupancy);
-  irr.get("building", o.p_building);
-  irr.finish();
-  Section surf(node, "surface");
-  surf.get("crown_slope", o.crown_slope);
-  surf.get("max_grade", o.max_grade);
-  surf.get("bump_amplitude_m", o.bump_amplitude_m);
-  surf.get("curb_height_m", o.curb_height_m);
-  surf.finish();
-  Section raster(node, "raster");
-  raster.get("tile_size_m", o.tile_size_m);
-  raster.get("tile_resolution_m", o.tile_resolution_m);
-  raster.get("height_resolution_m", o.height_resolution_m);
-  raster.get("tile_cache_size", o.tile_cache_size);
-  raster.finish();
-  o.validate();
+}
+
+WorldOptions WorldOptions::fromYaml(const config::YamlReader& r) {
+  WorldOptions o;
+  r.read("seed", o.seed);
+  r.read("flat", o.flat);
+  r.read("right_hand_traffic", o.right_hand_traffic);
+  const auto lanes = r.section("lanes");
+  lanes.read("default_width_m", o.default_lane_width_m);
+  lanes.read("width_jitter_m", o.lane_width_jitter_m);
+  lanes.read("width_min_m", o.lane_width_min_m);
+  lanes.read("width_max_m", o.lane_width_max_m);
+  const auto irr = r.section("irregularities");
+  irr.read("parking_lane", o.p_parking_lane);
+  irr.read("bike_lane", o.p_bike_lane);
+  irr.read("bus_bay", o.p_bus_bay);
+  irr.read("turn_pocket", o.p_turn_pocket);
+  irr.read("faded_marking", o.p_faded_marking);
+  irr.read("missing_marking", o.p_missing_marking);
+  irr.read("crosswalk", o.p_crosswalk);
+  irr.read("stop_line", o.p_stop_line);
+  irr.read("sidewalk", o.p_sidewalk);
+  irr.read("parked_car_occupancy", o.parked_car_occupancy);
+  irr.read("building", o.p_building);
+  const auto surf = r.section("surface");
+  surf.read("crown_slope", o.crown_slope);
+  surf.read("max_grade", o.max_grade);
+  surf.read("bump_amplitude_m", o.bump_amplitude_m);
+  surf.read("curb_height_m", o.curb_height_m);
+  const auto raster = r.section("raster");
+  raster.read("tile_size_m", o.tile_size_m);
+  raster.read("tile_resolution_m", o.tile_resolution_m);
+  raster.read("height_resolution_m", o.height_resolution_m);
+  raster.read("tile_cache_size", o.tile_cache_size);
+  try {
+    o.validate();
+  } catch (const WorldConfigError& e) {
+    r.failHere(e.what());
+  }
   return o;
 }
 
 WorldOptions WorldOptions::fromYamlFile(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw WorldConfigError("world config: cannot read '" + path + "'");
   try {
-    return fromYaml(YAML::LoadFile(path));
-  } catch (const YAML::Exception& e) {
-    throw WorldConfigError("world config '" + path + "': " + e.what());
+    const auto r = config::YamlReader::loadFile(path);
+    WorldOptions o = fromYaml(r);
+    r.finish();
+    return o;
+  } catch (const config::ConfigError& e) {
+    throw WorldConfigError(std::string("world config: ") + e.what());
   }
 }
 

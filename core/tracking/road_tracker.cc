@@ -19,6 +19,8 @@
 // state machine runs until it settles (at most a few transitions per pose).
 #include "core/tracking/road_tracker.h"
 
+#include "core/config/yaml_reader.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -499,35 +501,33 @@ void RoadTracker::interpolateCrossing(RoadEvent& e, int64_t road, double s_cross
   e.position = prev_position_ + f * (e.position - prev_position_);
 }
 
-namespace {
-
-template <typename T>
-void readKey(const YAML::Node& node, const char* key, T& value) {
-  if (node && node[key]) value = node[key].as<T>();
+RoadTrackerConfig RoadTrackerConfig::fromYaml(const YAML::Node& n) {
+  const config::YamlReader r(n);
+  RoadTrackerConfig c = fromYaml(r);
+  r.finish();
+  return c;
 }
 
-}  // namespace
-
-RoadTrackerConfig RoadTrackerConfig::fromYaml(const YAML::Node& n) {
+RoadTrackerConfig RoadTrackerConfig::fromYaml(const config::YamlReader& r) {
   RoadTrackerConfig c;
-  readKey(n, "measurement_sigma_m", c.measurement_sigma_m);
-  readKey(n, "acceleration_sigma", c.acceleration_sigma);
-  readKey(n, "acquire_distance_m", c.acquire_distance_m);
-  readKey(n, "acquire_heading_rad", c.acquire_heading_rad);
-  readKey(n, "exit_distance_m", c.exit_distance_m);
-  readKey(n, "exit_heading_rad", c.exit_heading_rad);
-  readKey(n, "u_turn_heading_rad", c.u_turn_heading_rad);
-  readKey(n, "exit_ambiguity_m", c.exit_ambiguity_m);
-  readKey(n, "exit_commit_m", c.exit_commit_m);
-  readKey(n, "switch_margin_m", c.switch_margin_m);
-  readKey(n, "switch_time_s", c.switch_time_s);
-  readKey(n, "left_map_distance_m", c.left_map_distance_m);
-  readKey(n, "left_map_time_s", c.left_map_time_s);
-  readKey(n, "wrong_way_heading_rad", c.wrong_way_heading_rad);
-  readKey(n, "wrong_way_time_s", c.wrong_way_time_s);
-  readKey(n, "pose_gap_s", c.pose_gap_s);
-  readKey(n, "max_innovation_m", c.max_innovation_m);
-  readKey(n, "time_jump_s", c.time_jump_s);
+  r.read("measurement_sigma_m", c.measurement_sigma_m);
+  r.read("acceleration_sigma", c.acceleration_sigma);
+  r.read("acquire_distance_m", c.acquire_distance_m);
+  r.read("acquire_heading_rad", c.acquire_heading_rad);
+  r.read("exit_distance_m", c.exit_distance_m);
+  r.read("exit_heading_rad", c.exit_heading_rad);
+  r.read("u_turn_heading_rad", c.u_turn_heading_rad);
+  r.read("exit_ambiguity_m", c.exit_ambiguity_m);
+  r.read("exit_commit_m", c.exit_commit_m);
+  r.read("switch_margin_m", c.switch_margin_m);
+  r.read("switch_time_s", c.switch_time_s);
+  r.read("left_map_distance_m", c.left_map_distance_m);
+  r.read("left_map_time_s", c.left_map_time_s);
+  r.read("wrong_way_heading_rad", c.wrong_way_heading_rad);
+  r.read("wrong_way_time_s", c.wrong_way_time_s);
+  r.read("pose_gap_s", c.pose_gap_s);
+  r.read("max_innovation_m", c.max_innovation_m);
+  r.read("time_jump_s", c.time_jump_s);
   return c;
 }
 

@@ -26,6 +26,8 @@
 #include <string>
 #include <vector>
 
+namespace lanemap::config { class YamlReader; }
+
 namespace lanemap::tracking {
 
 struct PoseInput {
@@ -83,8 +85,11 @@ struct RoadTrackerConfig {
   // A single older pose, or one less far back, is out of order and ignored.
   double time_jump_s = 1.0;
 
-  // The keys present in `node` (config/road_tracker.yaml `tracker:`), defaults for the others.
+  // The keys present in `node` (config/road_tracker.yaml `tracker:`), defaults for the others; an
+  // unknown key or a mistyped value throws config::ConfigError naming the key.
   static RoadTrackerConfig fromYaml(const YAML::Node& node);
+  // The same from a config section (the caller's finish() refuses unknown keys).
+  static RoadTrackerConfig fromYaml(const config::YamlReader& r);
 };
 
 class RoadTracker {

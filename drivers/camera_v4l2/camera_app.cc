@@ -5,46 +5,28 @@
 #include "lanemap/image_t.hpp"
 
 #include <iostream>
-#include <set>
 #include <stdexcept>
 
 namespace lanemap::drivers {
-namespace {
 
-template <typename T>
-void readKey(const YAML::Node& config, const char* key, T& value) {
-  readConfigKey(config, key, value, "camera_v4l2");
-}
-
-}  // namespace
-
-void CameraSettings::load(const YAML::Node& config) {
-  if (!config) return;
-  static const std::set<std::string> kKeys = {
-      "lcm_url", "device", "channel", "format", "width", "height", "fps", "jpeg_quality", "buffers",
-      "poll_timeout_ms", "stall_timeout_s", "max_timestamp_age_ms", "reconnect",
-      "reconnect_initial_s", "reconnect_max_s"};
-  for (const auto& kv : config) {
-    const auto key = kv.first.as<std::string>();
-    if (!kKeys.count(key)) throw std::runtime_error("camera_v4l2 config: unknown key '" + key + "'");
-  }
+void CameraSettings::load(const config::YamlReader& config) {
   auto& c = capture;
-  readKey(config, "device", device);
-  readKey(config, "channel", channel);
-  readKey(config, "format", c.format);
-  readKey(config, "width", c.width);
-  readKey(config, "height", c.height);
-  readKey(config, "fps", c.fps);
-  readKey(config, "jpeg_quality", c.jpeg_quality);
-  readKey(config, "buffers", c.buffers);
-  readKey(config, "poll_timeout_ms", c.poll_timeout_ms);
-  readKey(config, "stall_timeout_s", c.stall_timeout_s);
+  config.read("device", device);
+  config.read("channel", channel);
+  config.read("format", c.format);
+  config.read("width", c.width);
+  config.read("height", c.height);
+  config.read("fps", c.fps);
+  config.read("jpeg_quality", c.jpeg_quality);
+  config.read("buffers", c.buffers);
+  config.read("poll_timeout_ms", c.poll_timeout_ms);
+  config.read("stall_timeout_s", c.stall_timeout_s);
   double age_ms = static_cast<double>(c.max_timestamp_age_us) * 1e-3;
-  readKey(config, "max_timestamp_age_ms", age_ms);
+  config.read("max_timestamp_age_ms", age_ms);
   c.max_timestamp_age_us = static_cast<int64_t>(age_ms * 1e3);
-  readKey(config, "reconnect", c.reconnect);
-  readKey(config, "reconnect_initial_s", c.reconnect_initial_s);
-  readKey(config, "reconnect_max_s", c.reconnect_max_s);
+  config.read("reconnect", c.reconnect);
+  config.read("reconnect_initial_s", c.reconnect_initial_s);
+  config.read("reconnect_max_s", c.reconnect_max_s);
 }
 
 CameraApp::CameraApp(Process& process, CameraSettings settings)

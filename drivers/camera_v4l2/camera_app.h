@@ -21,7 +21,8 @@ struct CameraSettings {
 
   // Reads the keys present in `config` (unknown keys are an error naming them). Throws
   // std::runtime_error naming the key on a wrong type.
-  void load(const YAML::Node& config);
+  // The driver's config (strict: the caller's finish() refuses unknown keys).
+  void load(const config::YamlReader& config);
 };
 
 class CameraApp {

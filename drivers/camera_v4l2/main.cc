@@ -34,7 +34,8 @@ int main(int argc, char** argv) {
   }
   try {
     lanemap::drivers::CameraSettings settings;
-    settings.load(process.config());
+    settings.load(process.settings());
+    process.settings().finish();
     if (device) settings.device = *device;
     if (format) settings.capture.format = *format;
     if (width) settings.capture.width = *width;

@@ -9,44 +9,26 @@
 #include <cstring>
 #include <fstream>
 #include <iostream>
-#include <set>
 #include <stdexcept>
 
 namespace lanemap::drivers {
 namespace {
 
-template <typename T>
-void readKey(const YAML::Node& config, const char* key, T& value) {
-  readConfigKey(config, key, value, "lidar_vlp16");
-}
-
 constexpr int kPositionPacketSize = 512;  // VLP-16 position (GPS/PPS) packet payload
 
 }  // namespace
 
-void LidarSettings::load(const YAML::Node& config) {
-  if (!config) return;
-  static const std::set<std::string> kKeys = {"lcm_url",          "model",
-                                              "address",          "data_port",
-                                              "position_port",    "receive_buffer_bytes",
-                                              "publish_points",   "packets_channel",
-                                              "points_channel",   "rate_scale",
-                                              "keep_capture_time"};
-  for (const auto& kv : config) {
-    const auto key = kv.first.as<std::string>();
-    if (!kKeys.count(key))
-      throw std::runtime_error("lidar_vlp16 config: unknown key '" + key + "'");
-  }
-  readKey(config, "model", model);
-  readKey(config, "address", address);
-  readKey(config, "data_port", data_port);
-  readKey(config, "position_port", position_port);
-  readKey(config, "receive_buffer_bytes", receive_buffer_bytes);
-  readKey(config, "publish_points", publish_points);
-  readKey(config, "packets_channel", packets_channel);
-  readKey(config, "points_channel", points_channel);
-  readKey(config, "rate_scale", rate_scale);
-  readKey(config, "keep_capture_time", keep_capture_time);
+void LidarSettings::load(const config::YamlReader& config) {
+  config.read("model", model);
+  config.read("address", address);
+  config.read("data_port", data_port);
+  config.read("position_port", position_port);
+  config.read("receive_buffer_bytes", receive_buffer_bytes);
+  config.read("publish_points", publish_points);
+  config.read("packets_channel", packets_channel);
+  config.read("points_channel", points_channel);
+  config.read("rate_scale", rate_scale);
+  config.read("keep_capture_time", keep_capture_time);
 }
 
 void LidarSettings::validate() const {

@@ -33,7 +33,8 @@ struct LidarSettings {
 
   // Reads the keys present in `config` (unknown keys are an error naming them). Throws
   // std::runtime_error naming the key on a wrong type or value.
-  void load(const YAML::Node& config);
+  // The driver's config (strict: the caller's finish() refuses unknown keys).
+  void load(const config::YamlReader& config);
   void validate() const;
   std::optional<lidar::Model> forcedModel() const;  // nullopt for "auto"
 };

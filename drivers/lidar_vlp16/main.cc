@@ -32,7 +32,8 @@ int main(int argc, char** argv) {
 
   try {
     lanemap::drivers::LidarSettings settings;
-    settings.load(process.config());
+    settings.load(process.settings());
+    process.settings().finish();
     settings.pcap = cli.pcap;
     if (app.count("--rate-scale")) settings.rate_scale = cli.rate_scale;
     settings.keep_capture_time = settings.keep_capture_time || cli.keep_capture_time;

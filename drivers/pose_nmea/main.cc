@@ -27,7 +27,8 @@ int main(int argc, char** argv) {
 
   try {
     lanemap::drivers::PoseSettings settings;
-    settings.load(process.config());
+    settings.load(process.settings());
+    process.settings().finish();
     if (source) settings.source = *source;
     if (serial) {
       settings.source = "serial";

@@ -8,25 +8,10 @@
 #include <pthread.h>
 
 #include <iostream>
-#include <set>
 #include <stdexcept>
 
 namespace lanemap::drivers {
 namespace {
-
-template <typename T>
-void readKey(const YAML::Node& config, const char* key, T& value) {
-  readConfigKey(config, key, value, "pose_nmea");
-}
-
-void checkKeys(const YAML::Node& node, const std::set<std::string>& known,
-               const std::string& where) {
-  for (const auto& kv : node) {
-    const auto key = kv.first.as<std::string>();
-    if (!known.count(key))
-      throw std::runtime_error("pose_nmea config: unknown key '" + where + key + "'");
-  }
-}
 
 // SIGINT/SIGTERM go to the worker, never to the main thread's LCM wait (see lidar_vlp16's
 // processes/framework/stop_signals.h: Process::spin() treats an interrupted wait as a failure).
@@ -40,41 +25,31 @@ void unblockStopSignals() {
 
 }  // namespace
 
-void PoseSettings::load(const YAML::Node& config) {
-  if (!config) return;
-  checkKeys(config,
-            {"lcm_url", "source", "serial_device", "baud", "udp_address", "udp_port", "file",
-             "realtime", "channel", "talkers", "combiner"},
-            "");
-  readKey(config, "source", source);
-  readKey(config, "serial_device", serial_device);
-  readKey(config, "baud", baud);
-  readKey(config, "udp_address", udp_address);
-  readKey(config, "udp_port", udp_port);
-  readKey(config, "file", file);
-  readKey(config, "realtime", realtime);
-  readKey(config, "channel", channel);
-  readKey(config, "talkers", talkers);
-  if (const YAML::Node c = config["combiner"]) {
-    checkKeys(c,
-              {"uere_single_m", "uere_dgnss_m", "uere_rtk_float_m", "uere_rtk_fixed_m",
-               "uere_dead_reckoning_m", "vertical_factor", "heading_sigma_deg",
-               "course_heading_sigma_deg", "roll_pitch_sigma_deg", "min_speed_for_course_mps",
-               "use_course_as_heading", "publish_invalid"},
-              "combiner.");
+void PoseSettings::load(const config::YamlReader& config) {
+  config.read("source", source);
+  config.read("serial_device", serial_device);
+  config.read("baud", baud);
+  config.read("udp_address", udp_address);
+  config.read("udp_port", udp_port);
+  config.read("file", file);
+  config.read("realtime", realtime);
+  config.read("channel", channel);
+  config.read("talkers", talkers);
+  {
+    const config::YamlReader c = config.section("combiner");
     auto& o = combiner;
-    readKey(c, "uere_single_m", o.uere_single_m);
-    readKey(c, "uere_dgnss_m", o.uere_dgnss_m);
-    readKey(c, "uere_rtk_float_m", o.uere_rtk_float_m);
-    readKey(c, "uere_rtk_fixed_m", o.uere_rtk_fixed_m);
-    readKey(c, "uere_dead_reckoning_m", o.uere_dead_reckoning_m);
-    readKey(c, "vertical_factor", o.vertical_factor);
-    readKey(c, "heading_sigma_deg", o.heading_sigma_deg);
-    readKey(c, "course_heading_sigma_deg", o.course_heading_sigma_deg);
-    readKey(c, "roll_pitch_sigma_deg", o.roll_pitch_sigma_deg);
-    readKey(c, "min_speed_for_course_mps", o.min_speed_for_course_mps);
-    readKey(c, "use_course_as_heading", o.use_course_as_heading);
-    readKey(c, "publish_invalid", o.publish_invalid);
+    c.read("uere_single_m", o.uere_single_m);
+    c.read("uere_dgnss_m", o.uere_dgnss_m);
+    c.read("uere_rtk_float_m", o.uere_rtk_float_m);
+    c.read("uere_rtk_fixed_m", o.uere_rtk_fixed_m);
+    c.read("uere_dead_reckoning_m", o.uere_dead_reckoning_m);
+    c.read("vertical_factor", o.vertical_factor);
+    c.read("heading_sigma_deg", o.heading_sigma_deg);
+    c.read("course_heading_sigma_deg", o.course_heading_sigma_deg);
+    c.read("roll_pitch_sigma_deg", o.roll_pitch_sigma_deg);
+    c.read("min_speed_for_course_mps", o.min_speed_for_course_mps);
+    c.read("use_course_as_heading", o.use_course_as_heading);
+    c.read("publish_invalid", o.publish_invalid);
   }
 }
 

@@ -30,7 +30,8 @@ struct PoseSettings {
   gnss::CombinerOptions combiner;
 
   // Reads the keys present (unknown keys are an error); throws std::runtime_error naming the key.
-  void load(const YAML::Node& config);
+  // The driver's config (strict: the caller's finish() refuses unknown keys).
+  void load(const config::YamlReader& config);
   void validate() const;
 };
 

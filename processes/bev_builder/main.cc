@@ -23,6 +23,7 @@
 #include "core/bev/bev_render.h"
 #include "core/bev/bev_store.h"
 #include "core/camera/camera_model.h"
+#include "core/config/vehicle_config.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
 #include "lanemap/bev_preview_t.hpp"
@@ -34,6 +35,7 @@
 #include "processes/framework/channels.h"
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
 
 #include <algorithm>
 #include <chrono>
@@ -47,11 +49,6 @@
 namespace {
 
 using namespace lanemap;
-
-template <typename T>
-void read(const YAML::Node& node, const char* key, T& value) {
-  if (node && node[key]) value = node[key].as<T>();
-}
 
 class BevBuilderApp {
  public:
@@ -91,12 +88,8 @@ class BevBuilderApp {
     }
   }
 
-  void subscribe(const std::string& semantic_channel, const YAML::Node& queues) {
-    int q_pose = 1000, q_sem = 30, q_lidar = 10, q_event = 100;
-    read(queues, "pose", q_pose);
-    read(queues, "semantic", q_sem);
-    read(queues, "lidar", q_lidar);
-    read(queues, "road_event", q_event);
+  void subscribe(const std::string& semantic_channel, const BevBuilderSettings& s) {
+    const int q_pose = s.pose_queue, q_sem = s.semantic_queue, q_lidar = s.lidar_queue, q_event = s.road_event_queue;
     auto& lcm = process_.lcm();
     lcm.subscribe(channels::kPose, &BevBuilderApp::onPose, this)->setQueueCapacity(q_pose);
     lcm.subscribe(semantic_channel, &BevBuilderApp::onLabels, this)->setQueueCapacity(q_sem);
@@ -330,48 +323,34 @@ int main(int argc, char** argv) {
   Process process("bev_builder");
   std::string osm_flag, store_flag, channel_flag, vehicle_flag;
   bool no_lidar = false;
-  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: config osm)");
+  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: the osm of the config's map: file)");
   process.cli().add_option("--store", store_flag, "map store folder (default: config store)");
   process.cli().add_option("--semantic-channel", channel_flag, "semantic channel (default: config semantic_channel)");
   process.cli().add_option("--vehicle", vehicle_flag, "vehicle YAML: camera, lidar mount (default: config vehicle)");
   process.cli().add_flag("--no-lidar", no_lidar, "flat ground only");
   if (int rc = process.init(argc, argv); rc >= 0) return rc;
   try {
-    const YAML::Node& config = process.config();
-    std::string osm = osm_flag, store = store_flag, channel = channel_flag, vehicle = "config/vehicle.yaml";
-    if (osm.empty()) read(config, "osm", osm);
-    if (store.empty()) read(config, "store", store);
-    if (channel.empty()) channel = channels::kSemanticFront;
-    if (channel_flag.empty()) read(config, "semantic_channel", channel);
-    read(config, "vehicle", vehicle);
-    if (!vehicle_flag.empty()) vehicle = vehicle_flag;
-    if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the config");
+    const auto settings = BevBuilderSettings::fromYaml(process.settings());
+    process.settings().finish();
+    const std::string osm = osm_flag.empty() ? settings.map.osm : osm_flag;
+    const std::string store = store_flag.empty() ? settings.store : store_flag;
+    const std::string channel = channel_flag.empty() ? settings.semantic_channel : channel_flag;
+    const std::string vehicle = vehicle_flag.empty() ? resolveConfigFile(settings.vehicle) : vehicle_flag;
+    if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the map config");
     if (store.empty()) throw std::runtime_error("no map store: give --store or `store:` in the config");
-    skeleton::SkeletonOptions sk_options;
-    read(config, "junction_merge_radius_m", sk_options.junction_merge_radius_m);
-    if (config["origin"]) {
-      sk_options.origin = geo::LatLonAlt{config["origin"]["lat"].as<double>(), config["origin"]["lon"].as<double>(), 0.0};
-    }
-    auto sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(osm::readOsm(osm), sk_options));
-    const YAML::Node veh = loadYamlFile(vehicle);
-    const auto camera = camera::CameraModel::fromYaml(veh["camera"]);
-    bev::BevBuilderOptions options = bev::BevBuilderOptions::fromYaml(config);
+    auto sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(osm::readOsm(osm), settings.map.skeleton));
+    const auto vehicle_config = config::VehicleConfig::fromYamlFile(vehicle);
+    const camera::CameraModel& camera = vehicle_config.camera;
+    bev::BevBuilderOptions options = settings.options;
     if (no_lidar) options.use_lidar = false;
-    if (options.use_lidar) options.lidar_to_vehicle = camera::mountFromYaml(veh["lidar"]["mount"], vehicle + ": lidar.mount");
+    if (options.use_lidar) options.lidar_to_vehicle = vehicle_config.lidarToVehicle();
     std::cerr << "bev_builder: " << sk->roads().size() << " atomic roads from " << osm << ", " << channel
               << (options.use_lidar ? " + LIDAR mesh" : " (flat ground)") << ", store " << store << "\n";
     BevBuilderApp app(process, std::move(sk), camera, options, store);
-    double preview_period_s = 1.0;
-    int preview_max_px = 512;
-    read(config["preview"], "period_s", preview_period_s);
-    read(config["preview"], "max_px", preview_max_px);
-    if (preview_max_px < 16) throw std::runtime_error("preview.max_px must be >= 16, got " + std::to_string(preview_max_px));
-    app.setPreview(preview_period_s, preview_max_px);
-    double checkpoint_period_s = 2.0;
-    read(config["checkpoint"], "period_s", checkpoint_period_s);
-    app.setCheckpointPeriod(checkpoint_period_s);
+    app.setPreview(settings.preview_period_s, settings.preview_max_px);
+    app.setCheckpointPeriod(settings.checkpoint_period_s);
     app.recover();
-    app.subscribe(channel, config["queue_capacity"]);
+    app.subscribe(channel, settings);
     const int rc = process.spin();
     app.finish();
     return rc;

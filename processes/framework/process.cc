@@ -116,7 +116,11 @@ int Process::init(int argc, char** argv) {
     return cli_.exit(e);
   }
   try {
-    if (!config_path_.empty()) config_ = loadYamlFile(config_path_);
+    if (!config_path_.empty()) {
+      settings_ = config::YamlReader::loadFile(config_path_);
+      config_ = settings_.node();
+    }
+    settings_.allow({"lcm_url"});
   } catch (const std::exception& e) {
     std::cerr << name_ << ": " << e.what() << "\n";
     return 2;

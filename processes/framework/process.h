@@ -10,6 +10,8 @@
 //   }
 #pragma once
 
+#include "core/config/yaml_reader.h"
+
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <yaml-cpp/yaml.h>
@@ -59,18 +61,6 @@ std::string resolveLcmUrl(const std::string& flag, const YAML::Node& config);
 // Loads a YAML file; throws std::runtime_error naming the file and the problem.
 YAML::Node loadYamlFile(const std::string& path);
 
-// Sets `value` from config[key] when the key is present; a value of the wrong type throws
-// std::runtime_error naming `owner` (the process or driver) and the key.
-template <typename T>
-void readConfigKey(const YAML::Node& config, const char* key, T& value, const std::string& owner) {
-  if (!config[key]) return;
-  try {
-    value = config[key].as<T>();
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(owner + " config key '" + std::string(key) + "': " + e.what());
-  }
-}
-
 class Process {
  public:
   explicit Process(std::string name);
@@ -86,6 +76,9 @@ class Process {
 
   const std::string& name() const { return name_; }
   const YAML::Node& config() const { return config_; }
+  // The same config through the strict reader (knows the file; `lcm_url` is already known): read
+  // every key through it, then call its finish() so that an unknown key is an error naming it.
+  const config::YamlReader& settings() const { return settings_; }
   lcm::LCM& lcm() { return *lcm_; }
   Counters& counters() { return counters_; }
   LatencyWindow& latency() { return latency_; }
@@ -107,6 +100,7 @@ class Process {
   std::string config_path_;
   std::string lcm_url_flag_;
   YAML::Node config_;
+  config::YamlReader settings_{YAML::Node()};
   std::unique_ptr<lcm::LCM> lcm_;
   Counters counters_;
   LatencyWindow latency_;

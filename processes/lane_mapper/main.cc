@@ -19,6 +19,7 @@
 #include "lanemap/lane_map_t.hpp"
 #include "processes/framework/channels.h"
 #include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
 
 #include <algorithm>
 #include <chrono>
@@ -37,11 +38,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace lanemap;
-
-template <typename T>
-void read(const YAML::Node& node, const char* key, T& value) {
-  if (node && node[key]) value = node[key].as<T>();
-}
 
 int8_t polylineType(map::LineType t) {
   switch (t) {
@@ -231,32 +227,21 @@ class LaneMapperApp {
 int main(int argc, char** argv) {
   lanemap::Process process("lane_mapper");
   std::string osm_flag, store_flag;
-  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: config osm)");
+  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: the osm of the config's map: file)");
   process.cli().add_option("--store", store_flag, "map store folder (default: config store)");
   if (int rc = process.init(argc, argv); rc >= 0) return rc;
   try {
-    const YAML::Node& config = process.config();
-    std::string osm = osm_flag, store = store_flag;
-    if (osm.empty()) read(config, "osm", osm);
-    if (store.empty()) read(config, "store", store);
-    if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the config");
+    const auto settings = lanemap::LaneMapperSettings::fromYaml(process.settings());
+    process.settings().finish();
+    const std::string osm = osm_flag.empty() ? settings.map.osm : osm_flag;
+    const std::string store = store_flag.empty() ? settings.store : store_flag;
+    if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the map config");
     if (store.empty()) throw std::runtime_error("no map store: give --store or `store:` in the config");
-    lanemap::skeleton::SkeletonOptions options;
-    read(config, "junction_merge_radius_m", options.junction_merge_radius_m);
-    if (config["origin"]) {
-      options.origin = lanemap::geo::LatLonAlt{config["origin"]["lat"].as<double>(), config["origin"]["lon"].as<double>(), 0.0};
-    }
     const lanemap::osm::OsmData osm_data = lanemap::osm::readOsm(osm);
-    auto sk = std::make_unique<lanemap::skeleton::Skeleton>(lanemap::skeleton::Skeleton::build(osm_data, options));
-    const auto intersection_options = lanemap::intersections::IntersectionOptions::fromYaml(config["intersections"]);
-    const auto explorer = lanemap::lanes::ExplorerOptions::fromYaml(config["explorer"]);
-    std::string channel = lanemap::channels::kBevRoad;
-    int queue = 100;
-    read(config, "bev_channel", channel);
-    read(config, "queue_capacity", queue);
+    auto sk = std::make_unique<lanemap::skeleton::Skeleton>(lanemap::skeleton::Skeleton::build(osm_data, settings.map.skeleton));
     std::cerr << "lane_mapper: " << sk->roads().size() << " atomic roads from " << osm << ", store " << store << "\n";
-    LaneMapperApp app(process, std::move(sk), explorer, store, channel, queue, intersection_options,
-                      osm_data.restrictions);
+    LaneMapperApp app(process, std::move(sk), settings.explorer, store, settings.bev_channel, settings.queue_capacity,
+                      settings.intersections, osm_data.restrictions);
     return process.spin();
   } catch (const std::exception& e) {
     std::cerr << "lane_mapper: " << e.what() << "\n";

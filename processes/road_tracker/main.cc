@@ -12,6 +12,7 @@
 #include "processes/framework/channels.h"
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
 
 #include <cmath>
 #include <iostream>
@@ -21,11 +22,6 @@
 namespace {
 
 using lanemap::tracking::RoadTrackerConfig;
-
-template <typename T>
-void read(const YAML::Node& node, const char* key, T& value) {
-  if (node && node[key]) value = node[key].as<T>();
-}
 
 class RoadTrackerApp {
  public:
@@ -85,28 +81,18 @@ class RoadTrackerApp {
 int main(int argc, char** argv) {
   lanemap::Process process("road_tracker");
   std::string osm_flag;
-  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: config osm)");
+  process.cli().add_option("--osm", osm_flag, "OSM file of the skeleton (default: the osm of the config's map: file)");
   if (int rc = process.init(argc, argv); rc >= 0) return rc;
   try {
-    const YAML::Node& config = process.config();
-    std::string osm = osm_flag;
-    if (osm.empty()) read(config, "osm", osm);
-    if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the config");
-    lanemap::skeleton::SkeletonOptions options;
-    read(config, "junction_merge_radius_m", options.junction_merge_radius_m);
-    if (config["origin"]) {
-      options.origin = lanemap::geo::LatLonAlt{config["origin"]["lat"].as<double>(),
-                                               config["origin"]["lon"].as<double>(), 0.0};
-    }
+    const auto settings = lanemap::RoadTrackerSettings::fromYaml(process.settings());
+    process.settings().finish();
+    const std::string osm = osm_flag.empty() ? settings.map.osm : osm_flag;
+    if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the map config");
     auto skeleton = std::make_unique<lanemap::skeleton::Skeleton>(
-        lanemap::skeleton::Skeleton::build(lanemap::osm::readOsm(osm), options));
-    std::string pose_channel = lanemap::channels::kPose;
-    int queue = 1000;
-    read(config, "pose_channel", pose_channel);
-    read(config, "queue_capacity", queue);
+        lanemap::skeleton::Skeleton::build(lanemap::osm::readOsm(osm), settings.map.skeleton));
     std::cerr << "road_tracker: " << skeleton->roads().size() << " atomic roads, "
               << skeleton->intersections().size() << " intersections from " << osm << "\n";
-    RoadTrackerApp app(process, std::move(skeleton), RoadTrackerConfig::fromYaml(config["tracker"]), pose_channel, queue);
+    RoadTrackerApp app(process, std::move(skeleton), settings.tracker, settings.pose_channel, settings.queue_capacity);
     return process.spin();
   } catch (const std::exception& e) {
     std::cerr << "road_tracker: " << e.what() << "\n";

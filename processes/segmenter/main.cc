@@ -30,6 +30,7 @@
 #include "processes/framework/channels.h"
 #include "processes/framework/lcm_log_writer.h"
 #include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
 #include "processes/segmenter/frame_queue.h"
 
 #include <opencv2/core.hpp>
@@ -45,21 +46,7 @@ namespace {
 
 using namespace lanemap;
 
-template <typename T>
-void read(const YAML::Node& node, const char* key, T& value) {
-  if (node && node[key]) value = node[key].as<T>();
-}
-
-struct Settings {
-  std::string camera_channel = channels::kCameraFront;
-  std::string output_channel = channels::kSemanticFront;
-  std::string truth_channel = channels::kSemanticFrontTruth;
-  bool raw = false;            // encoding: raw (else png)
-  int queue_frames = 1;
-  int expect_width = 0, expect_height = 0;
-  int lcm_queue = 30;
-  int debug_delay_ms = 0;
-};
+using Settings = SegmenterSettings;  // config/segmenter.yaml (processes/framework/process_configs.h)
 
 // A camera frame and when LCM received it (wall clock, microseconds).
 struct ReceivedFrame {
@@ -236,33 +223,18 @@ int main(int argc, char** argv) {
   process.cli().add_option("--log-out", log_out, "... into this copy of it (with SEMANTIC_FRONT added), then exit");
   if (int rc = process.init(argc, argv); rc >= 0) return rc;
   try {
-    const YAML::Node& config = process.config();
-    Settings s;
-    read(config, "camera_channel", s.camera_channel);
-    read(config, "output_channel", s.output_channel);
-    read(config, "truth_channel", s.truth_channel);
-    std::string encoding = "png";
-    read(config, "encoding", encoding);
-    if (encoding != "png" && encoding != "raw") throw std::runtime_error("encoding must be png or raw, not '" + encoding + "'");
-    s.raw = encoding == "raw";
-    read(config, "queue_frames", s.queue_frames);
-    if (s.queue_frames < 1 || s.queue_frames > 8) throw std::runtime_error("queue_frames must be 1..8");
-    read(config, "expect_width", s.expect_width);
-    read(config, "expect_height", s.expect_height);
-    read(config, "lcm_queue", s.lcm_queue);
-    read(config, "debug_delay_ms", s.debug_delay_ms);
-    bool oracle = oracle_flag;
-    if (!oracle) read(config, "oracle", oracle);
+    const Settings s = SegmenterSettings::fromYaml(process.settings(), model_flag);
+    process.settings().finish();
+    const bool oracle = oracle_flag || s.oracle;
     if (oracle) {
       std::cerr << "segmenter: oracle mode: " << s.truth_channel << " -> " << s.output_channel << "\n";
       OracleApp app(process, s);
       process.setState("oracle");
       return process.spin();
     }
-    int threads = 0;
-    read(config, "threads", threads);
-    if (threads > 0) cv::setNumThreads(threads);
-    const seg::ModelConfig mc = seg::ModelConfig::fromSegmenterConfig(config, model_flag, LANEMAP_SOURCE_DIR);
+    if (s.threads > 0) cv::setNumThreads(s.threads);
+    if (!s.model) throw std::runtime_error("no model: give --model FILE.onnx or a model: block (its path) in the config");
+    const seg::ModelConfig& mc = *s.model;
     auto model = std::make_unique<seg::Segmenter>(mc);
     std::cerr << "segmenter: model " << mc.path << " (" << model->modelClasses() << " classes, input "
               << mc.input_width << "x" << mc.input_height << "), " << s.camera_channel << " -> "

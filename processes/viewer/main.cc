@@ -29,6 +29,7 @@
 #include "processes/framework/channels.h"
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
 
 #include <lcm/lcm-cpp.hpp>
 #include <unistd.h>
@@ -48,11 +49,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace lanemap;
-
-template <typename T>
-void read(const YAML::Node& node, const char* key, T& value) {
-  if (node && node[key]) value = node[key].as<T>();
-}
 
 double monotonicSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -375,7 +371,7 @@ int main(int argc, char** argv) {
       "Live: lanemap-viewer --osm roads.osm   (subscribes to POSE, ROAD_EVENT, BEV_ROAD, LANE_MAP, STATUS)\n"
       "Store: lanemap-viewer --store DIR --osm roads.osm   (a finished map store, no LCM)\n"
       "Then open the URL it prints (default http://127.0.0.1:8765/).");
-  cli.add_option("--osm", osm_flag, "OSM file of the skeleton (default: config osm)");
+  cli.add_option("--osm", osm_flag, "OSM file of the skeleton (default: the osm of the config's map: file)");
   cli.add_option("--store", store, "browse this finished map store (lanes/, graph.lcmlog) instead of the bus");
   cli.add_option("--listen", listen_flag, "address to listen on (default: config listen, else 127.0.0.1; 0.0.0.0 = every interface)");
   cli.add_option("--port", port_flag, "TCP port (default: config port, else 8765; 0 = any free port)")->check(CLI::Range(0, 65535));
@@ -383,44 +379,29 @@ int main(int argc, char** argv) {
   cli.add_option("--url-file", url_file, "write the page's URL to this file once listening (scripts, tests)");
   if (int rc = process.init(static_cast<int>(args.size()), args.data()); rc >= 0) return rc;
   try {
-    const YAML::Node& config = process.config();
-    std::string osm = osm_flag, listen = "127.0.0.1", assets = assets_flag;
-    int port = 8765;
-    if (osm.empty()) read(config, "osm", osm);
-    read(config, "listen", listen);
-    read(config, "port", port);
-    if (!listen_flag.empty()) listen = listen_flag;
-    if (port_flag >= 0) port = port_flag;
-    if (assets.empty()) read(config, "assets", assets);
+    const auto settings = ViewerSettings::fromYaml(process.settings());
+    process.settings().finish();
+    const std::string osm = osm_flag.empty() ? settings.map.osm : osm_flag;
+    const std::string listen = listen_flag.empty() ? settings.server.address : listen_flag;
+    const int port = port_flag >= 0 ? port_flag : settings.server.port;
+    std::string assets = assets_flag.empty() ? settings.assets : assets_flag;
     if (assets.empty()) assets = defaultAssets();
-    if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the config");
-    if (port < 0 || port > 65535) throw std::runtime_error("port " + std::to_string(port) + " out of range");
+    if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the map config");
 
-    skeleton::SkeletonOptions sk_options;
-    read(config, "junction_merge_radius_m", sk_options.junction_merge_radius_m);
-    if (config["origin"]) {
-      sk_options.origin = geo::LatLonAlt{config["origin"]["lat"].as<double>(), config["origin"]["lon"].as<double>(), 0.0};
-    }
     const osm::OsmData osm_data = osm::readOsm(osm);
-    auto sk = std::make_shared<const skeleton::Skeleton>(skeleton::Skeleton::build(osm_data, sk_options));
-    viewer::ViewerOptions vo;
-    read(config, "trail_spacing_m", vo.trail_spacing_m);
-    read(config, "bev_max_px", vo.bev_max_px);
-    read(config, "status_stale_s", vo.status_stale_s);
+    auto sk = std::make_shared<const skeleton::Skeleton>(skeleton::Skeleton::build(osm_data, settings.map.skeleton));
+    viewer::ViewerOptions vo = settings.viewer;
     if (!store.empty()) {
       // A finished run: its last STATUS is old by nature; show it as recorded, drops included,
       // without calling anything behind for being silent or for drops long past.
       vo.status_stale_s = std::numeric_limits<double>::infinity();
       vo.loss_window_s = -1.0;
     }
-    viewer::ViewerState state(sk, osm_data.restrictions, intersections::IntersectionOptions::fromYaml(config["intersections"]), vo);
+    viewer::ViewerState state(sk, osm_data.restrictions, settings.intersections, vo);
 
-    viewer::HttpServerOptions so;
+    viewer::HttpServerOptions so = settings.server;
     so.address = listen;
     so.port = static_cast<uint16_t>(port);
-    read(config, "idle_timeout_s", so.idle_timeout_s);
-    read(config, "max_connections", so.max_connections);
-    read(config, "event_interval_s", so.event_interval_s);
     auto assets_map = viewer::loadAssets(assets);
     if (!assets_map.count("/index.html")) throw std::runtime_error("viewer assets: no index.html in " + assets);
 
@@ -428,9 +409,7 @@ int main(int argc, char** argv) {
     if (!store.empty()) {
       loadStore(store, state);
     } else {
-      int pose_queue = 1000;
-      read(config, "pose_queue", pose_queue);
-      feed = std::make_unique<LiveFeed>(process, state, pose_queue);
+      feed = std::make_unique<LiveFeed>(process, state, settings.pose_queue);
     }
     auto events = [&state](uint64_t& last) -> std::string {
       const uint64_t v = state.version();

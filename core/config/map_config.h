@@ -1,0 +1,31 @@
+// The map block every process that builds the road skeleton shares (config/map.yaml): the OSM file,
+// the ENU origin and the skeleton options. The road tracker, the BEV builder, the lane mapper, the
+// viewer and lanemap-offline read it through MapConfig::fromYaml, so all of them build the same
+// skeleton (same atomic roads, ids and ROIs) from the same file.
+//
+//   osm: data/osm/west-oakland.osm          # optional; the processes' --osm overrides it
+//   origin: {lat: 37.80765, lon: -122.30042} # optional (alt: 0); default: centre of the OSM bounds
+//   skeleton: {junction_merge_radius_m: 12.0, ...}   # core/skeleton/skeleton.h SkeletonOptions
+#pragma once
+
+#include "core/config/yaml_reader.h"
+#include "core/skeleton/skeleton.h"
+
+#include <string>
+
+namespace lanemap::config {
+
+struct MapConfig {
+  std::string osm;  // as written (relative to the working directory); "" when not given
+  skeleton::SkeletonOptions skeleton;
+
+  // Reads the keys above from `r` (strict: r.finish() refuses any other key).
+  static MapConfig fromYaml(const YamlReader& r);
+  // Loads `path` (config/map.yaml); errors are ConfigError naming the file and key.
+  static MapConfig fromYamlFile(const std::string& path);
+};
+
+// SkeletonOptions from a `skeleton:` section (every key optional; values checked: > 0).
+skeleton::SkeletonOptions skeletonOptionsFromYaml(const YamlReader& r);
+
+}  // namespace lanemap::config

@@ -221,6 +221,7 @@ class Builder {
     for (auto& xs : xss_) buildCrossSection(xs);
     for (const auto& in : sk_.intersections()) buildIntersection(in);
     placeObstacles();
+    for (auto& cw : truth().crosswalks) cw.id = nextId();
     fillStats();
     impl_->finalize();
     return std::move(impl_);
@@ -1109,6 +1110,27 @@ class Builder {
       std::vector<Vector2d> poly = {at(xs, a, d), at(xs, b, d), at(xs, b, d + kStripe), at(xs, a, d + kStripe)};
       addFill(Surface::kCrosswalkPaint, detail::kLayerCrosswalk, std::move(poly));
     }
+    // The truth's crosswalk lanelet: its two edges (s = a and s = b) from one curb to the other,
+    // the left edge on the walker's left; the road lanelets of both directions under it.
+    map::Crosswalk cw;
+    cw.id = 0;  // given in run(), after every line and lanelet (their ids stay as they were)
+    cw.road_id = xs.ref->id;
+    const auto edge = [&](double s) {
+      std::vector<Vector3d> e;
+      for (double d : {d_lo, d_hi}) {
+        const Vector2d p = at(xs, s, d);
+        const double l = m_ * v[cl], r = m_ * v[cr];
+        e.emplace_back(p.x(), p.y(), terrainAt(p) + profileAt(xs, s, m_ * d, std::max(l, r), std::min(l, r)));
+      }
+      return e;
+    };
+    std::vector<Vector3d> ea = edge(a), eb = edge(b);
+    const Vector2d w = (ea.back() - ea.front()).head<2>(), q = (eb.front() - ea.front()).head<2>();
+    const bool b_left = w.x() * q.y() - w.y() * q.x() > 0.0;
+    cw.left = b_left ? eb : ea;
+    cw.right = b_left ? ea : eb;
+    for (int k = 0; k < 2; ++k) cw.crossing.insert(cw.crossing.end(), sec.lanes[k].begin(), sec.lanes[k].end());
+    truth().crosswalks.push_back(std::move(cw));
   }
 
   void emitStopLine(const CrossSection& xs, const Section& sec, int k, double s) {

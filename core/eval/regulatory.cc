@@ -1,0 +1,172 @@
+#include "core/eval/regulatory.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <optional>
+#include <tuple>
+#include <unordered_map>
+
+namespace lanemap::eval {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double ratio(size_t a, size_t b) { return b == 0 ? kNaN : static_cast<double>(a) / static_cast<double>(b); }
+
+// One-to-one greedy matching of two point sets, nearest pairs first, within max_m.
+MatchScore matchPoints(const std::vector<Eigen::Vector2d>& truth, const std::vector<Eigen::Vector2d>& built,
+                       double max_m, std::vector<std::pair<size_t, size_t>>* pairs = nullptr) {
+  MatchScore s;
+  s.truth = truth.size();
+  s.built = built.size();
+  std::vector<std::tuple<double, size_t, size_t>> cand;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    for (size_t j = 0; j < built.size(); ++j) {
+      const double d = (truth[i] - built[j]).norm();
+      if (d < max_m) cand.emplace_back(d, i, j);
+    }
+  }
+  std::sort(cand.begin(), cand.end());
+  std::vector<bool> t_used(truth.size()), b_used(built.size());
+  for (const auto& [d, i, j] : cand) {
+    if (t_used[i] || b_used[j]) continue;
+    t_used[i] = b_used[j] = true;
+    ++s.matched;
+    s.error_sum_m += d;
+    if (pairs) pairs->emplace_back(i, j);
+  }
+  return s;
+}
+
+struct StopLines {
+  std::vector<int64_t> ids;
+  std::vector<Eigen::Vector2d> mid;
+};
+
+StopLines stopLinesOf(const map::LaneMap& m) {
+  StopLines s;
+  for (const auto& l : m.lines) {
+    if (l.type != map::LineType::kStopLine || l.points.empty()) continue;
+    s.ids.push_back(l.id);
+    s.mid.push_back(0.5 * (l.points.front() + l.points.back()).head<2>());
+  }
+  return s;
+}
+
+std::vector<Eigen::Vector2d> crosswalkCentres(const map::LaneMap& m) {
+  std::vector<Eigen::Vector2d> out;
+  for (const auto& c : m.crosswalks) {
+    if (c.left.empty() || c.right.empty()) continue;
+    out.push_back(0.25 * (c.left.front() + c.left.back() + c.right.front() + c.right.back()).head<2>());
+  }
+  return out;
+}
+
+// The rule at a stop line: the kind of the element with that ref line; nullopt: none.
+std::optional<map::RegulatoryKind> ruleAt(const map::LaneMap& m, int64_t stop_line) {
+  for (const auto& r : m.regulatory_elements) {
+    if (r.stop_line_id == stop_line) return r.kind;
+  }
+  return std::nullopt;
+}
+
+// Lines shared by two lanelets of one direction, and whether they permit a lane change.
+std::vector<std::pair<const map::LineString*, bool>> sharedLines(const map::LaneMap& m) {
+  std::unordered_map<int64_t, int> as_left, as_right;
+  for (const auto& ll : m.lanelets) {
+    ++as_left[ll.left_id];
+    ++as_right[ll.right_id];
+  }
+  std::vector<std::pair<const map::LineString*, bool>> out;
+  for (const auto& l : m.lines) {
+    if (l.type == map::LineType::kStopLine || l.points.size() < 2) continue;
+    if (as_left.count(l.id) && as_right.count(l.id)) out.emplace_back(&l, l.type == map::LineType::kDashed);
+  }
+  return out;
+}
+
+double distanceToPolyline(const std::vector<Eigen::Vector3d>& pl, const Eigen::Vector2d& p) {
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i + 1 < pl.size(); ++i) {
+    const Eigen::Vector2d a = pl[i].head<2>(), b = pl[i + 1].head<2>();
+    const double len2 = (b - a).squaredNorm();
+    const double t = len2 > 0.0 ? std::clamp((p - a).dot(b - a) / len2, 0.0, 1.0) : 0.0;
+    best = std::min(best, (a + t * (b - a) - p).norm());
+  }
+  return best;
+}
+
+// The point halfway along a polyline.
+Eigen::Vector2d midpointOf(const std::vector<Eigen::Vector3d>& pl) {
+  double total = 0.0;
+  for (size_t i = 1; i < pl.size(); ++i) total += (pl[i] - pl[i - 1]).head<2>().norm();
+  double s = 0.0;
+  for (size_t i = 1; i < pl.size(); ++i) {
+    const double seg = (pl[i] - pl[i - 1]).head<2>().norm();
+    if (s + seg >= total / 2.0 && seg > 0.0) {
+      const double t = (total / 2.0 - s) / seg;
+      return (pl[i - 1] + t * (pl[i] - pl[i - 1])).head<2>();
+    }
+    s += seg;
+  }
+  return pl.front().head<2>();
+}
+
+}  // namespace
+
+double MatchScore::precision() const { return ratio(matched, built); }
+double MatchScore::recall() const { return ratio(matched, truth); }
+double MatchScore::error_m() const { return matched == 0 ? kNaN : error_sum_m / static_cast<double>(matched); }
+double RegulatoryScores::ruleAccuracy() const { return ratio(rules_agreeing, rules_compared); }
+double RegulatoryScores::laneChangeAccuracy() const { return ratio(lane_change_correct, lane_change_matched); }
+double RegulatoryScores::laneChangeCoverage() const { return ratio(lane_change_matched, lane_change_truth); }
+
+RegulatoryScores scoreRegulatory(const map::LaneMap& truth, const map::LaneMap& built, const RegulatoryOptions& o) {
+  RegulatoryScores s;
+  const StopLines ts = stopLinesOf(truth), bs = stopLinesOf(built);
+  std::vector<std::pair<size_t, size_t>> pairs;
+  s.stop_lines = matchPoints(ts.mid, bs.mid, o.stop_line_match_m, &pairs);
+  for (const auto& [i, j] : pairs) {
+    ++s.rules_compared;
+    s.rules_agreeing += ruleAt(truth, ts.ids[i]) == ruleAt(built, bs.ids[j]);
+  }
+  s.crosswalks = matchPoints(crosswalkCentres(truth), crosswalkCentres(built), o.crosswalk_match_m);
+
+  const auto t_shared = sharedLines(truth), b_shared = sharedLines(built);
+  s.lane_change_truth = t_shared.size();
+  for (const auto& [line, yes] : t_shared) {
+    const Eigen::Vector2d mid = midpointOf(line->points);
+    double best = o.lane_change_match_m;
+    std::optional<bool> found;
+    for (const auto& [bline, byes] : b_shared) {
+      const double d = distanceToPolyline(bline->points, mid);
+      if (d < best) {
+        best = d;
+        found = byes;
+      }
+    }
+    if (!found) continue;
+    ++s.lane_change_matched;
+    s.lane_change_correct += *found == yes;
+  }
+  return s;
+}
+
+nlohmann::json toJson(const RegulatoryScores& s) {
+  const auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  const auto match = [&](const MatchScore& m) {
+    return nlohmann::json{{"truth", m.truth},        {"built", m.built},         {"matched", m.matched},
+                          {"precision", num(m.precision())}, {"recall", num(m.recall())}, {"error_m", num(m.error_m())}};
+  };
+  return {{"stop_lines", match(s.stop_lines)},
+          {"crosswalks", match(s.crosswalks)},
+          {"rules", {{"compared", s.rules_compared}, {"agreeing", s.rules_agreeing}, {"accuracy", num(s.ruleAccuracy())}}},
+          {"lane_change",
+           {{"truth", s.lane_change_truth}, {"matched", s.lane_change_matched}, {"correct", s.lane_change_correct},
+            {"accuracy", num(s.laneChangeAccuracy())}, {"coverage", num(s.laneChangeCoverage())}}}};
+}
+
+}  // namespace lanemap::eval

@@ -19,7 +19,9 @@
 #include "core/bev/bev_store.h"
 #include "core/camera/camera_model.h"
 #include "core/io/geojson.h"
+#include "core/intersections/regulatory.h"
 #include "core/io/lanelet2.h"
+#include "core/lanes/stop_lines.h"
 #include "core/io/map_png.h"
 #include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
@@ -162,7 +164,9 @@ class OfflineMapper {
       try {
         const auto res = lanes::exploreRoad(it->second, lanes::RoadGeometry::fromSkeleton(*r), explorer_);
         const auto& origin = sk_.frame().origin();
-        assembler_.setRoad(road.road_id, lanes::toLaneMap(res, origin.lat, origin.lon, origin.alt));
+        map::LaneMap lanes_of_road = lanes::toLaneMap(res, origin.lat, origin.lon, origin.alt);
+        lanes::addStopLines(it->second, lanes_of_road);  // stop lines the BEV saw at the lanes' ends
+        assembler_.setRoad(road.road_id, std::move(lanes_of_road));
         ++roads_mapped_;
         entry["lanes"] = res.lanes.size();
         if (!o_.quiet) std::fprintf(stderr, "\rlanemap-offline: road %lld: %zu lanes%20s\n", static_cast<long long>(road.road_id), res.lanes.size(), "");
@@ -246,7 +250,9 @@ int main(int argc, char** argv) {
     }
     mapper.finish();
     std::vector<std::string> junction_failures;
-    const map::LaneMap map = mapper.assembler().map(&junction_failures);
+    map::LaneMap map = mapper.assembler().map(&junction_failures);
+    // Stop signs, give way and traffic lights at the stop lines, from the OSM junction controls.
+    intersections::addRegulatoryElements(map, sk, intersections::readControlNodes(o.osm));
     for (const auto& f : junction_failures) std::fprintf(stderr, "lanemap-offline: %s failed, the rest is mapped\n", f.c_str());
     const auto s = mapper.builder().stats();
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

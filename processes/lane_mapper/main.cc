@@ -10,9 +10,11 @@
 //
 //   lanemap-lane-mapper --config config/lane_mapper.yaml [--osm FILE] [--store DIR]
 #include "core/bev/bev_grid.h"
+#include "core/intersections/regulatory.h"
 #include "core/io/lanelet2.h"
 #include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
+#include "core/lanes/stop_lines.h"
 #include "core/mapping/map_assembler.h"
 #include "core/skeleton/skeleton.h"
 #include "lanemap/bev_road_t.hpp"
@@ -131,6 +133,7 @@ class LaneMapperApp {
     const lanes::ExplorationResult res = lanes::exploreRoad(grid, lanes::RoadGeometry::fromSkeleton(*road), options_);
     const auto& o = sk_->frame().origin();
     map::LaneMap m = lanes::toLaneMap(res, o.lat, o.lon, o.alt);
+    lanes::addStopLines(grid, m);  // stop lines the BEV saw at the lanes' ends
     io::writeLanelet2(m, roadFile(job.road_id), write_options_);  // atomic: a crash leaves the old file or the new one
     {
       std::lock_guard<std::mutex> lock(roads_mutex_);
@@ -153,7 +156,8 @@ class LaneMapperApp {
     mapping::MapAssembler assembler(*sk_, intersection_options_, restrictions_);
     for (const auto& [id, m] : roads_) assembler.setRoad(id, m);
     std::vector<std::string> failures;
-    const map::LaneMap all = assembler.map(&failures);
+    map::LaneMap all = assembler.map(&failures);
+    intersections::addRegulatoryElements(all, *sk_, controls_);  // OSM stop / give way / signals
     for (const auto& f : failures) std::cerr << "lane_mapper: " << f << " failed, the rest is mapped\n";
     process_.counters().set("intersections_failed", static_cast<int64_t>(failures.size()));
     if (!all.lanelets.empty()) io::writeLanelet2(all, wholeMapFile(), write_options_);
@@ -222,6 +226,12 @@ class LaneMapperApp {
   std::map<int64_t, map::LaneMap> roads_;
   intersections::IntersectionOptions intersection_options_;
   std::vector<osm::Restriction> restrictions_;
+  std::unordered_map<int64_t, intersections::ControlNode> controls_;  // set before spin()
+
+ public:
+  void setControls(std::unordered_map<int64_t, intersections::ControlNode> c) { controls_ = std::move(c); }
+
+ private:
   io::Lanelet2WriteOptions write_options_;
   std::thread worker_;
 };
@@ -257,6 +267,7 @@ int main(int argc, char** argv) {
     std::cerr << "lane_mapper: " << sk->roads().size() << " atomic roads from " << osm << ", store " << store << "\n";
     LaneMapperApp app(process, std::move(sk), explorer, store, channel, queue, intersection_options,
                       osm_data.restrictions);
+    app.setControls(lanemap::intersections::readControlNodes(osm));
     return process.spin();
   } catch (const std::exception& e) {
     std::cerr << "lane_mapper: " << e.what() << "\n";

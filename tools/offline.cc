@@ -166,6 +166,7 @@ class OfflineMapper {
         const auto& origin = sk_.frame().origin();
         map::LaneMap lanes_of_road = lanes::toLaneMap(res, origin.lat, origin.lon, origin.alt);
         lanes::addStopLines(it->second, lanes_of_road);  // stop lines the BEV saw at the lanes' ends
+        crosswalks_[road.road_id] = lanes::findCrosswalks(it->second, lanes_of_road, 1);
         assembler_.setRoad(road.road_id, std::move(lanes_of_road));
         ++roads_mapped_;
         entry["lanes"] = res.lanes.size();
@@ -188,6 +189,16 @@ class OfflineMapper {
   lanes::ExplorerOptions explorer_;
   mapping::MapAssembler assembler_;
   std::map<int64_t, bev::BevGrid> grids_;
+  std::map<int64_t, std::vector<map::Crosswalk>> crosswalks_;  // by road, from its BEV
+
+ public:
+  std::vector<map::Crosswalk> crosswalks() const {
+    std::vector<map::Crosswalk> all;
+    for (const auto& [id, c] : crosswalks_) all.insert(all.end(), c.begin(), c.end());
+    return all;
+  }
+
+ private:
   int roads_mapped_ = 0, roads_failed_ = 0;
   int64_t frames_segmented_ = 0, frames_failed_ = 0;
   nlohmann::json road_log_ = nlohmann::json::array();
@@ -253,6 +264,7 @@ int main(int argc, char** argv) {
     map::LaneMap map = mapper.assembler().map(&junction_failures);
     // Stop signs, give way and traffic lights at the stop lines, from the OSM junction controls.
     intersections::addRegulatoryElements(map, sk, intersections::readControlNodes(o.osm));
+    lanes::addCrosswalks(map, mapper.crosswalks());  // the crossings the BEV saw, both directions merged
     for (const auto& f : junction_failures) std::fprintf(stderr, "lanemap-offline: %s failed, the rest is mapped\n", f.c_str());
     const auto s = mapper.builder().stats();
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

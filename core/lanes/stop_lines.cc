@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <set>
 
 namespace lanemap::lanes {
 
@@ -111,6 +112,144 @@ size_t addStopLines(const bev::BevGrid& grid, map::LaneMap& m, const StopLineOpt
   }
   for (auto& l : lines) m.lines.push_back(std::move(l));
   return lines.size();
+}
+
+namespace {
+
+// A lanelet's centre and bound points at distance `back` from its end (from_end) or its start.
+std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> sectionAt(const map::LaneMap& m, const map::Lanelet& ll,
+                                                                     double back, bool from_end, Eigen::Vector2d* dir) {
+  const map::LineString* l = m.line(ll.left_id);
+  const map::LineString* r = m.line(ll.right_id);
+  if (!l || !r || ll.centre.size() < 2) return std::nullopt;
+  std::vector<double> arc{0.0};
+  for (size_t i = 1; i < ll.centre.size(); ++i) arc.push_back(arc.back() + (ll.centre[i] - ll.centre[i - 1]).head<2>().norm());
+  if (back > arc.back()) return std::nullopt;
+  const double s = from_end ? arc.back() - back : back;
+  if (dir) {
+    const size_t i = std::clamp<size_t>(std::upper_bound(arc.begin(), arc.end(), s) - arc.begin(), 1, arc.size() - 1) - 1;
+    *dir = (ll.centre[i + 1] - ll.centre[i]).head<2>().normalized();
+  }
+  return crossSection(ll, *l, *r, arc, s);
+}
+
+}  // namespace
+
+std::vector<map::Crosswalk> findCrosswalks(const bev::BevGrid& grid, const map::LaneMap& m, int64_t first_id,
+                                           const CrosswalkOptions& o) {
+  std::vector<map::Crosswalk> out;
+  const auto isPaint = [&](const Eigen::Vector2d& p) {
+    const auto cell = grid.cellOf(p);
+    return grid.count(cell, bev::Layer::kObserved) >= o.min_observed && grid.fraction(cell, bev::Layer::kCrosswalk) >= o.min_fraction;
+  };
+  // The lanes at each end: lanelets with no successor (the road's end) / no predecessor (its start).
+  std::set<int64_t> has_pred;
+  for (const auto& ll : m.lanelets) has_pred.insert(ll.successors.begin(), ll.successors.end());
+  for (const bool at_end : {true, false}) {
+    std::vector<const map::Lanelet*> lanes;
+    for (const auto& ll : m.lanelets) {
+      if (ll.kind != map::LaneletKind::kRoad) continue;
+      if (at_end ? ll.successors.empty() : !has_pred.count(ll.id)) lanes.push_back(&ll);
+    }
+    if (lanes.empty()) continue;
+    std::sort(lanes.begin(), lanes.end(), [](const auto* a, const auto* b) { return a->index_from_left < b->index_from_left; });
+    struct Station {
+      double back;
+      Eigen::Vector3d left, right;  // the crossing's extent at this station
+      Eigen::Vector2d dir;
+    };
+    std::vector<Station> hits;
+    for (double back = 0.0; back <= o.search_m + 1e-9; back += o.step_m) {
+      Eigen::Vector2d dir;
+      const auto a = sectionAt(m, *lanes.front(), back, at_end, &dir);
+      const auto b = sectionAt(m, *lanes.back(), back, at_end, nullptr);
+      if (!a || !b) break;
+      const Eigen::Vector3d pl = a->first, pr = b->second;
+      const double width = (pr - pl).head<2>().norm();
+      if (width <= 0.0) continue;
+      const Eigen::Vector3d across = (pr - pl) / width;  // left to right
+      int paint = 0, n = 0;
+      for (double u = 0.0; u <= width + 1e-9; u += o.step_m, ++n) paint += isPaint((pl + u * across).head<2>());
+      if (n == 0 || paint < o.min_cover * n) continue;
+      // On beyond the lanes while the paint goes on.
+      const auto reach = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& step) {
+        double last = 0.0;
+        for (double u = o.step_m; u <= o.beyond_m + 1e-9 && u - last <= o.max_gap_m; u += o.step_m) {
+          if (isPaint((from + u * step).head<2>())) last = u;
+        }
+        return last;
+      };
+      const double out_left = reach(pl, -across), out_right = reach(pr, across);
+      hits.push_back({back, pl - out_left * across, pr + out_right * across, dir});
+    }
+    // Runs of stations.
+    size_t i = 0;
+    while (i < hits.size()) {
+      size_t j = i;
+      while (j + 1 < hits.size() && hits[j + 1].back - hits[j].back <= o.max_gap_m + 1e-9) ++j;
+      if (hits[j].back - hits[i].back >= o.min_depth_m) {
+        // Walking from the right curb to the left one, the edge further along the road is on the right.
+        const Station& near = at_end ? hits[j] : hits[i];  // smaller arc length along the road
+        const Station& far = at_end ? hits[i] : hits[j];
+        map::Crosswalk c;
+        c.id = first_id++;
+        c.road_id = lanes.front()->road_id;
+        c.left = {near.right, near.left};
+        c.right = {far.right, far.left};
+        for (const auto* ll : lanes) c.crossing.push_back(ll->id);
+        out.push_back(std::move(c));
+      }
+      i = j + 1;
+    }
+  }
+  return out;
+}
+
+void mergeCrosswalks(std::vector<map::Crosswalk>& cws, double merge_m) {
+  const auto centre = [](const map::Crosswalk& c) {
+    return (0.25 * (c.left.front() + c.left.back() + c.right.front() + c.right.back())).head<2>().eval();
+  };
+  const auto width = [](const map::Crosswalk& c) { return (c.left.back() - c.left.front()).head<2>().norm(); };
+  std::vector<map::Crosswalk> out;
+  for (auto& c : cws) {
+    auto it = std::find_if(out.begin(), out.end(), [&](const map::Crosswalk& k) { return (centre(k) - centre(c)).norm() < merge_m; });
+    if (it == out.end()) {
+      out.push_back(std::move(c));
+      continue;
+    }
+    std::vector<int64_t> crossing = it->crossing;
+    crossing.insert(crossing.end(), c.crossing.begin(), c.crossing.end());
+    if (width(c) > width(*it)) {
+      const int64_t id = it->id;
+      *it = std::move(c);
+      it->id = id;
+    }
+    std::sort(crossing.begin(), crossing.end());
+    crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
+    it->crossing = std::move(crossing);
+  }
+  cws = std::move(out);
+}
+
+size_t addCrosswalks(map::LaneMap& m, std::vector<map::Crosswalk> found, double merge_m) {
+  std::set<int64_t> lanelets;
+  int64_t next_id = 1;
+  for (const auto& l : m.lines) next_id = std::max(next_id, l.id + 1);
+  for (const auto& l : m.lanelets) {
+    next_id = std::max(next_id, l.id + 1);
+    lanelets.insert(l.id);
+  }
+  for (const auto& r : m.regulatory_elements) next_id = std::max(next_id, r.id + 1);
+  for (const auto& c : m.crosswalks) next_id = std::max(next_id, c.id + 1);
+  for (auto& c : found) {
+    c.id = next_id++;
+    c.crossing.erase(std::remove_if(c.crossing.begin(), c.crossing.end(), [&](int64_t id) { return !lanelets.count(id); }),
+                     c.crossing.end());
+  }
+  mergeCrosswalks(found, merge_m);
+  const size_t n = found.size();
+  for (auto& c : found) m.crosswalks.push_back(std::move(c));
+  return n;
 }
 
 }  // namespace lanemap::lanes

@@ -90,5 +90,57 @@ TEST(StopLines, TooLittleOrUnobservedOrFaintPaintIsNone) {
   EXPECT_EQ(addStopLines(early.grid, early.m, wide), 1u);
 }
 
+// Zebra stripes 0.5 m wide every metre across y = -6 .. 6 (beyond both lanes), x = x0 .. x0 + 3.
+void zebra(Road& r, double x0) {
+  for (double y = -6.0; y < 6.0; y += 1.0) r.paint(x0, x0 + 3.0, y, y + 0.5, bev::Layer::kCrosswalk, 4);
+  r.paint(x0 - 1.0, x0 + 4.0, -7.0, 7.0, bev::Layer::kObserved, 5);
+}
+
+TEST(Crosswalks, ZebraAtTheRoadsEndIsOneCrossingOverItsWholeWidth) {
+  Road r;
+  zebra(r, 34.0);
+  const auto found = findCrosswalks(r.grid, r.m, 500);
+  ASSERT_EQ(found.size(), 1u);
+  const map::Crosswalk& c = found[0];
+  EXPECT_EQ(c.id, 500);
+  EXPECT_EQ(c.crossing, (std::vector<int64_t>{10, 11}));
+  // Walking from the right curb (south) to the left one (north): the left edge is the one
+  // nearer the road's start (x = 34), the right edge the far one (x = 37).
+  ASSERT_EQ(c.left.size(), 2u);
+  EXPECT_NEAR(c.left[0].x(), 34.0, 0.15);
+  EXPECT_NEAR(c.right[0].x(), 37.0, 0.15);
+  EXPECT_LT(c.left[0].y(), c.left[1].y());
+  // Beyond the lanes (|y| <= 3.5) as far as the stripes go (the last one ends at y = 5.5).
+  EXPECT_NEAR(c.left[0].y(), -6.0, 0.2);
+  EXPECT_NEAR(c.left[1].y(), 5.5, 0.2);
+  // At the road's start too; and a map takes both, with fresh ids.
+  Road both;
+  zebra(both, 34.0);
+  zebra(both, 2.0);
+  const auto two = findCrosswalks(both.grid, both.m, 1);
+  ASSERT_EQ(two.size(), 2u);
+  map::LaneMap m = both.m;
+  EXPECT_EQ(addCrosswalks(m, two), 2u);
+  EXPECT_GT(std::min(m.crosswalks[0].id, m.crosswalks[1].id), 11);
+  // The same crossing found twice (e.g. from both directions) is one.
+  auto dup = found;
+  dup.push_back(found[0]);
+  dup.back().crossing = {77};
+  mergeCrosswalks(dup);
+  ASSERT_EQ(dup.size(), 1u);
+  EXPECT_EQ(dup[0].crossing, (std::vector<int64_t>{10, 11, 77}));
+}
+
+TEST(Crosswalks, ThinOrShallowPaintIsNone) {
+  Road r;
+  // One stripe across 1 m of the 7 m road: under 30 % of the samples.
+  r.paint(34.0, 37.0, 0.0, 1.0, bev::Layer::kCrosswalk, 5);
+  EXPECT_TRUE(findCrosswalks(r.grid, r.m, 1).empty());
+  // Zebra stripes only 1 m deep along the road: under min_depth_m (1.5 m).
+  Road s;
+  for (double y = -3.5; y < 3.5; y += 1.0) s.paint(34.0, 35.0, y, y + 0.5, bev::Layer::kCrosswalk, 5);
+  EXPECT_TRUE(findCrosswalks(s.grid, s.m, 1).empty());
+}
+
 }  // namespace
 }  // namespace lanemap::lanes

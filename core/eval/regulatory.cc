@@ -16,21 +16,23 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 double ratio(size_t a, size_t b) { return b == 0 ? kNaN : static_cast<double>(a) / static_cast<double>(b); }
 
-// One-to-one greedy matching of two point sets, nearest pairs first, within max_m.
-MatchScore matchPoints(const std::vector<Eigen::Vector2d>& truth, const std::vector<Eigen::Vector2d>& built,
-                       double max_m, std::vector<std::pair<size_t, size_t>>* pairs = nullptr) {
+// One-to-one greedy matching of n_truth against n_built items by distance(i, j), nearest pairs
+// first, within max_m.
+template <typename Distance>
+MatchScore matchNearest(size_t n_truth, size_t n_built, Distance distance, double max_m,
+                        std::vector<std::pair<size_t, size_t>>* pairs = nullptr) {
   MatchScore s;
-  s.truth = truth.size();
-  s.built = built.size();
+  s.truth = n_truth;
+  s.built = n_built;
   std::vector<std::tuple<double, size_t, size_t>> cand;
-  for (size_t i = 0; i < truth.size(); ++i) {
-    for (size_t j = 0; j < built.size(); ++j) {
-      const double d = (truth[i] - built[j]).norm();
+  for (size_t i = 0; i < n_truth; ++i) {
+    for (size_t j = 0; j < n_built; ++j) {
+      const double d = distance(i, j);
       if (d < max_m) cand.emplace_back(d, i, j);
     }
   }
   std::sort(cand.begin(), cand.end());
-  std::vector<bool> t_used(truth.size()), b_used(built.size());
+  std::vector<bool> t_used(n_truth), b_used(n_built);
   for (const auto& [d, i, j] : cand) {
     if (t_used[i] || b_used[j]) continue;
     t_used[i] = b_used[j] = true;
@@ -41,17 +43,12 @@ MatchScore matchPoints(const std::vector<Eigen::Vector2d>& truth, const std::vec
   return s;
 }
 
-struct StopLines {
-  std::vector<int64_t> ids;
-  std::vector<Eigen::Vector2d> mid;
-};
+double distanceToPolyline(const std::vector<Eigen::Vector3d>& pl, const Eigen::Vector2d& p);
 
-StopLines stopLinesOf(const map::LaneMap& m) {
-  StopLines s;
+std::vector<const map::LineString*> stopLinesOf(const map::LaneMap& m) {
+  std::vector<const map::LineString*> s;
   for (const auto& l : m.lines) {
-    if (l.type != map::LineType::kStopLine || l.points.empty()) continue;
-    s.ids.push_back(l.id);
-    s.mid.push_back(0.5 * (l.points.front() + l.points.back()).head<2>());
+    if (l.type == map::LineType::kStopLine && l.points.size() >= 2) s.push_back(&l);
   }
   return s;
 }
@@ -126,14 +123,22 @@ double RegulatoryScores::laneChangeCoverage() const { return ratio(lane_change_m
 
 RegulatoryScores scoreRegulatory(const map::LaneMap& truth, const map::LaneMap& built, const RegulatoryOptions& o) {
   RegulatoryScores s;
-  const StopLines ts = stopLinesOf(truth), bs = stopLinesOf(built);
+  const auto ts = stopLinesOf(truth), bs = stopLinesOf(built);
   std::vector<std::pair<size_t, size_t>> pairs;
-  s.stop_lines = matchPoints(ts.mid, bs.mid, o.stop_line_match_m, &pairs);
+  s.stop_lines = matchNearest(
+      ts.size(), bs.size(),
+      [&](size_t i, size_t j) {
+        const Eigen::Vector2d mid = 0.5 * (bs[j]->points.front() + bs[j]->points.back()).head<2>();
+        return distanceToPolyline(ts[i]->points, mid);
+      },
+      o.stop_line_match_m, &pairs);
   for (const auto& [i, j] : pairs) {
     ++s.rules_compared;
-    s.rules_agreeing += ruleAt(truth, ts.ids[i]) == ruleAt(built, bs.ids[j]);
+    s.rules_agreeing += ruleAt(truth, ts[i]->id) == ruleAt(built, bs[j]->id);
   }
-  s.crosswalks = matchPoints(crosswalkCentres(truth), crosswalkCentres(built), o.crosswalk_match_m);
+  const auto tc = crosswalkCentres(truth), bc = crosswalkCentres(built);
+  s.crosswalks = matchNearest(
+      tc.size(), bc.size(), [&](size_t i, size_t j) { return (tc[i] - bc[j]).norm(); }, o.crosswalk_match_m);
 
   const auto t_shared = sharedLines(truth), b_shared = sharedLines(built);
   s.lane_change_truth = t_shared.size();

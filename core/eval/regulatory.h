@@ -2,10 +2,11 @@
 // against the truth (issue 15), both map::LaneMap in one ENU frame; part of eval::evaluate.
 //
 // Definitions (xy plane):
-// - Stop lines: every line of type kStopLine. A stop line's position is its midpoint; a built one
-//   matches a truth one when their midpoints are closer than stop_line_match_m, one-to-one,
-//   greedily nearest first. precision = matched / built, recall = matched / truth, error_m = mean
-//   midpoint distance over the matched pairs (a stop line 0.3 m off: error 0.3).
+// - Stop lines: every line of type kStopLine. A built stop line's distance to a truth one is the
+//   distance of its midpoint to the truth line (so a bar over one lane of a three-lane approach
+//   counts by its offset along the road, not by where along the bar it lies); it matches within
+//   stop_line_match_m, one-to-one, greedily nearest first. precision = matched / built, recall =
+//   matched / truth, error_m = mean distance over the matched pairs (0.3 m off: error 0.3).
 // - Crosswalks: position = the centroid of its four corners (first and last points of both
 //   edges); matched like stop lines within crosswalk_match_m.
 // - Regulatory elements: per matched stop line pair, whether the rule at it agrees (the kind of

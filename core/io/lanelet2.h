@@ -19,7 +19,8 @@
 // - Points closer than 5 cm (Lanelet2's points_too_close limit) are one node in the file.
 // - Lanelet2 has no successor tags; successors are recovered from shared end/start points.
 // - Stop lines are ways type=stop_line; the lanelet that ends at one names it in the sidecar (and
-//   in Autoware's layout references a road_marking regulatory element referring to it). The
+//   in Autoware's layout, when no regulatory element below has it as ref_line, references a
+//   road_marking regulatory element referring to it). The
 //   reader also takes a stop line from a regulatory element's `ref_line` member (traffic lights,
 //   right of way) or a road_marking's `refers` in foreign maps.
 // - Regulatory elements (map::RegulatoryElement): a stop sign is a `traffic_sign` with

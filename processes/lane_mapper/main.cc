@@ -134,6 +134,10 @@ class LaneMapperApp {
     const auto& o = sk_->frame().origin();
     map::LaneMap m = lanes::toLaneMap(res, o.lat, o.lon, o.alt);
     lanes::addStopLines(grid, m);  // stop lines the BEV saw at the lanes' ends
+    int64_t next_id = 1;
+    for (const auto& l : m.lines) next_id = std::max(next_id, l.id + 1);
+    for (const auto& l : m.lanelets) next_id = std::max(next_id, l.id + 1);
+    m.crosswalks = lanes::findCrosswalks(grid, m, next_id);  // kept with the road's file
     io::writeLanelet2(m, roadFile(job.road_id), write_options_);  // atomic: a crash leaves the old file or the new one
     {
       std::lock_guard<std::mutex> lock(roads_mutex_);
@@ -158,6 +162,9 @@ class LaneMapperApp {
     std::vector<std::string> failures;
     map::LaneMap all = assembler.map(&failures);
     intersections::addRegulatoryElements(all, *sk_, controls_);  // OSM stop / give way / signals
+    std::vector<map::Crosswalk> crosswalks;
+    for (const auto& [id, m] : roads_) crosswalks.insert(crosswalks.end(), m.crosswalks.begin(), m.crosswalks.end());
+    lanes::addCrosswalks(all, std::move(crosswalks));  // both directions of a crossing merged
     for (const auto& f : failures) std::cerr << "lane_mapper: " << f << " failed, the rest is mapped\n";
     process_.counters().set("intersections_failed", static_cast<int64_t>(failures.size()));
     if (!all.lanelets.empty()) io::writeLanelet2(all, wholeMapFile(), write_options_);

@@ -272,6 +272,11 @@ int main(int argc, char** argv) {
                               {"roads_failed", mapper.roadsFailed()}, {"roads", mapper.roadLog()},
                               {"intersections_failed", junction_failures},
                               {"lanelets", map.lanelets.size()}, {"frames_projected", s.frames_projected},
+                              {"stop_lines", std::count_if(map.lines.begin(), map.lines.end(), [](const auto& l) {
+                                 return l.type == map::LineType::kStopLine;
+                               })},
+                              {"regulatory_elements", map.regulatory_elements.size()},
+                              {"crosswalks", map.crosswalks.size()},
                               {"frames_mesh", s.frames_mesh}, {"frames_segmented", mapper.framesSegmented()},
                               {"frames_failed", mapper.framesFailed()}, {"seconds", secs}};
     io::writeFileAtomically((fs::path(o.out) / "summary.json").string(), summary.dump(2) + "\n");

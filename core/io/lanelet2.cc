@@ -1632,8 +1632,13 @@ class Lanelet2Reader {
         r.light_estimated = false;
       }
       if (const nlohmann::json* j = sidecarEntry("regulatory_elements", id)) {
-        r.osm_node = j->value("osm_node", int64_t{-1});
-        r.light_estimated = j->value("light_position", std::string()) == "estimated";
+        try {
+          r.osm_node = j->value("osm_node", int64_t{-1});
+          r.light_estimated = j->value("light_position", std::string()) == "estimated";
+        } catch (const std::exception& e) {
+          throw Lanelet2Error("malformed lanemap sidecar '" + sidecar_->path + "' of '" + path_ +
+                              "': regulatory element " + std::to_string(id) + " " + e.what());
+        }
       }
       out_.map.regulatory_elements.push_back(std::move(r));
     }
@@ -1670,9 +1675,14 @@ class Lanelet2Reader {
       if (a.invert_left) std::reverse(cw.left.begin(), cw.left.end());
       if (a.invert_right) std::reverse(cw.right.begin(), cw.right.end());
       if (const nlohmann::json* j = sidecarEntry("crosswalks", c.id)) {
-        cw.road_id = j->value("road_id", int64_t{-1});
-        for (int64_t id : j->value("crossing", std::vector<int64_t>{})) {
-          if (kept.count(id)) cw.crossing.push_back(id);
+        try {
+          cw.road_id = j->value("road_id", int64_t{-1});
+          for (int64_t id : j->value("crossing", std::vector<int64_t>{})) {
+            if (kept.count(id)) cw.crossing.push_back(id);
+          }
+        } catch (const std::exception& e) {
+          throw Lanelet2Error("malformed lanemap sidecar '" + sidecar_->path + "' of '" + path_ + "': crosswalk " +
+                              std::to_string(c.id) + " " + e.what());
         }
       } else if (const auto it = crossing_of.find(c.id); it != crossing_of.end()) {
         cw.crossing = it->second;

@@ -933,6 +933,24 @@ TEST(Lanelet2, AutowareLayoutLinksCrosswalksAndRulesToTheirLanelets) {
   EXPECT_EQ(back.regulatory_elements[0].kind, map::RegulatoryKind::kStopSign);
 }
 
+TEST(Lanelet2, MalformedRulesInTheSidecarThrowWithItsPath) {
+  const std::string path = tempPath("rules_bad_sidecar.osm");
+  writeLanelet2(withRules(map::RegulatoryKind::kTrafficLight), path);
+  const std::string side = lanelet2SidecarPath(path);
+  std::string text = readText(side);
+  const auto at = text.find("\"osm_node\":4242");
+  ASSERT_NE(at, std::string::npos) << text.substr(0, 400);
+  text.replace(at, std::string("\"osm_node\":4242").size(), "\"osm_node\":\"x\"");
+  writeText(side, text);
+  try {
+    readLanelet2(path, 49.0, 8.4);
+    FAIL() << "no throw";
+  } catch (const Lanelet2Error& e) {
+    EXPECT_NE(std::string(e.what()).find(side), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("regulatory element 200"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Lanelet2, WriterRejectsBrokenRules) {
   LaneMap m = withRules(map::RegulatoryKind::kTrafficLight);
   m.regulatory_elements[0].stop_line_id = 99;

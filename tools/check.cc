@@ -13,13 +13,15 @@ int main(int argc, char** argv) {
   CLI::App app{"Checks a Lanelet2 map against Autoware's map requirements that lanelet2_validate does not check:\n"
                "ele on every node, lanelet tags (subtype, location, one_way, speed_limit), lane_change on lines\n"
                "between same-direction lanes, shared borders, bounds that share no node, centre lines inside\n"
-               "their lanelet, one lanelet per intersection path; with --autoware also turn_direction, stop lines\n"
-               "referenced by a regulatory element and map_projector_info.yaml. Exit status 1 on any failure."};
+               "their lanelet, one lanelet per intersection path, regulatory elements (stop signs, give way, traffic\n"
+               "lights) referenced by a lanelet with a stop line as ref_line; with --autoware also turn_direction,\n"
+               "stop lines referenced by a regulatory element, crosswalk lanelets referred to by Autoware's crosswalk\n"
+               "element and map_projector_info.yaml. Exit status 1 on any failure."};
   std::string path;
   lanemap::io::MapCheckOptions options;
   size_t max_ids = 20;
   app.add_option("map", path, "Lanelet2 map (.osm)")->required();
-  app.add_flag("--autoware", options.autoware, "also Autoware's layout: turn_direction, stop line regulatory elements, map_projector_info.yaml");
+  app.add_flag("--autoware", options.autoware, "also Autoware's layout: turn_direction, stop line and crosswalk regulatory elements, map_projector_info.yaml");
   app.add_option("--max-ids", max_ids, "offending ids printed per rule")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {

@@ -2,7 +2,9 @@
 // the paper's metrics and more (core/eval/evaluate.h has every definition): lane precision/recall
 // (a detection at IoU > 0.7 or RMS < 0.2 m), centre-line RMS, mIoU, intersection topology
 // precision/recall over (in lane, out lane) pairs and trajectory RMS, lane-graph precision/recall,
-// MapTR's Chamfer AP at 0.5/1.0/1.5 m, and per-road detail. Prints a summary; --json writes it all.
+// MapTR's Chamfer AP at 0.5/1.0/1.5 m, per-road detail, and (core/eval/regulatory.h) stop-line and
+// crosswalk precision/recall/position error, agreement of the rules at matched stop lines and
+// lane-change permission accuracy. Prints a summary; --json writes it all.
 //
 //   lanemap-eval --truth groundtruth.osm --map lane_map.osm [--json report.json]
 //                [--driven scenario.json | --driven drive.lcmlog --osm roads.osm | --mapped-roads-only]
@@ -67,7 +69,8 @@ std::set<lanemap::eval::RoadKey> drivenRoadsFromLog(const std::string& log_path,
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Scores a built Lanelet2 lane map against a ground-truth Lanelet2 map"};
+  CLI::App app{"Scores a built Lanelet2 lane map against a ground-truth Lanelet2 map: lanes, intersections, lane "
+               "graph, Chamfer AP, stop lines, crosswalks, their rules and lane-change permissions"};
   std::string truth_path, map_path, json_path, subtypes_arg = "road,highway,play_street,bus_lane,emergency_lane,exit,";
   lanemap::eval::EvalOptions options;
   std::string driven_path, osm_path;

@@ -26,7 +26,9 @@
 #include "core/camera/camera_model.h"
 #include "core/config/vehicle_config.h"
 #include "core/io/geojson.h"
+#include "core/intersections/regulatory.h"
 #include "core/io/lanelet2.h"
+#include "core/lanes/stop_lines.h"
 #include "core/io/map_png.h"
 #include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
@@ -187,7 +189,10 @@ class OfflineMapper {
       try {
         const auto res = lanes::exploreRoad(it->second, lanes::RoadGeometry::fromSkeleton(*r), explorer_);
         const auto& origin = sk_.frame().origin();
-        assembler_.setRoad(road.road_id, lanes::toLaneMap(res, origin.lat, origin.lon, origin.alt));
+        map::LaneMap lanes_of_road = lanes::toLaneMap(res, origin.lat, origin.lon, origin.alt);
+        lanes::addStopLines(it->second, lanes_of_road);  // stop lines the BEV saw at the lanes' ends
+        crosswalks_[road.road_id] = lanes::findCrosswalks(it->second, lanes_of_road, 1);
+        assembler_.setRoad(road.road_id, std::move(lanes_of_road));
         ++roads_mapped_;
         entry["lanes"] = res.lanes.size();
         if (!o_.quiet) std::fprintf(stderr, "\rlanemap-offline: road %lld: %zu lanes%20s\n", static_cast<long long>(road.road_id), res.lanes.size(), "");
@@ -209,6 +214,16 @@ class OfflineMapper {
   lanes::ExplorerOptions explorer_;
   mapping::MapAssembler assembler_;
   std::map<int64_t, bev::BevGrid> grids_;
+  std::map<int64_t, std::vector<map::Crosswalk>> crosswalks_;  // by road, from its BEV
+
+ public:
+  std::vector<map::Crosswalk> crosswalks() const {
+    std::vector<map::Crosswalk> all;
+    for (const auto& [id, c] : crosswalks_) all.insert(all.end(), c.begin(), c.end());
+    return all;
+  }
+
+ private:
   int roads_mapped_ = 0, roads_failed_ = 0;
   int64_t frames_segmented_ = 0, frames_failed_ = 0;
   nlohmann::json road_log_ = nlohmann::json::array();
@@ -277,7 +292,10 @@ int main(int argc, char** argv) {
     }
     mapper.finish();
     std::vector<std::string> junction_failures;
-    const map::LaneMap map = mapper.assembler().map(&junction_failures);
+    map::LaneMap map = mapper.assembler().map(&junction_failures);
+    // Stop signs, give way and traffic lights at the stop lines, from the OSM junction controls.
+    intersections::addRegulatoryElements(map, sk, intersections::readControlNodes(o.osm));
+    lanes::addCrosswalks(map, mapper.crosswalks());  // the crossings the BEV saw, both directions merged
     for (const auto& f : junction_failures) std::fprintf(stderr, "lanemap-offline: %s failed, the rest is mapped\n", f.c_str());
     const auto s = mapper.builder().stats();
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -285,6 +303,11 @@ int main(int argc, char** argv) {
                               {"roads_failed", mapper.roadsFailed()}, {"roads", mapper.roadLog()},
                               {"intersections_failed", junction_failures},
                               {"lanelets", map.lanelets.size()}, {"frames_projected", s.frames_projected},
+                              {"stop_lines", std::count_if(map.lines.begin(), map.lines.end(), [](const auto& l) {
+                                 return l.type == map::LineType::kStopLine;
+                               })},
+                              {"regulatory_elements", map.regulatory_elements.size()},
+                              {"crosswalks", map.crosswalks.size()},
                               {"frames_mesh", s.frames_mesh}, {"frames_segmented", mapper.framesSegmented()},
                               {"frames_failed", mapper.framesFailed()}, {"seconds", secs}};
     io::writeFileAtomically((fs::path(o.out) / "summary.json").string(), summary.dump(2) + "\n");

@@ -8,6 +8,7 @@
 //   <out>/scenario.json     route, seed, options, counts
 // Everything is checked (OSM, route) before anything is written; output goes to a temporary
 // folder renamed into place at the end, so a failed run leaves nothing behind.
+#include "core/intersections/regulatory.h"
 #include "core/io/lanelet2.h"
 #include "core/io/speed_limits.h"
 #include "core/map/simplify.h"
@@ -246,7 +247,10 @@ int main(int argc, char** argv) {
     // lane piece ending in a bend tighter than the road is wide can still defeat its heuristic
     // (Monaco: one lanelet of ~12,600 for 7 of 9 seeds tried; West Oakland: none): it is written
     // as it is, named here and in scenario.json ("lanelet2_misread"), rather than failing the drive.
-    const map::LaneMap truth_written = map::simplified(world->truth(), sim::kTruthSimplifyTolerance);
+    map::LaneMap truth_written = map::simplified(world->truth(), sim::kTruthSimplifyTolerance);
+    // Stop signs, give way and traffic lights at the truth's stop lines, from the OSM nodes.
+    const auto controls = intersections::readControlNodes(osm_path);
+    intersections::addRegulatoryElements(truth_written, sk, controls);
     const auto misread = io::orientationProblems(truth_written);
     for (const auto& m : misread) std::fprintf(stderr, "lanemap-sim: warning: %s\n", m.c_str());
     io::Lanelet2WriteOptions truth_options;
@@ -255,6 +259,10 @@ int main(int argc, char** argv) {
     io::writeLanelet2(truth_written, (tmp / "groundtruth.osm").string(), truth_options);
     io::RoadOsmOptions road_options;
     road_options.keep_lane_tags = keep_lane_tags;
+    for (const auto& [id, c] : controls) {  // roads.osm keeps the junction controls for the mapper
+      road_options.node_tags[id]["highway"] = intersections::toString(c.control);
+      if (!c.direction.empty()) road_options.node_tags[id]["direction"] = c.direction;
+    }
     io::writeRoadOsm(osm_data, (tmp / "roads.osm").string(), road_options);
     io::MapPngOptions png;
     png.background_polylines = io::skeletonPolylines(sk);

@@ -57,6 +57,22 @@ map::LaneMap restrictToRoads(const map::LaneMap& truth, const std::set<RoadKey>&
   for (const auto& ls : truth.lines) {
     if (lines.count(ls.id)) out.lines.push_back(ls);
   }
+  // The rules at kept stop lines and the crosswalks over kept lanelets, restricted likewise.
+  for (const auto& r : truth.regulatory_elements) {
+    if (!lines.count(r.stop_line_id)) continue;
+    map::RegulatoryElement k = r;
+    k.lanelets.clear();
+    k.priority.clear();
+    for (int64_t id : r.lanelets) if (keep.count(id)) k.lanelets.push_back(id);
+    for (int64_t id : r.priority) if (keep.count(id)) k.priority.push_back(id);
+    if (!k.lanelets.empty()) out.regulatory_elements.push_back(std::move(k));
+  }
+  for (const auto& c : truth.crosswalks) {
+    map::Crosswalk k = c;
+    k.crossing.clear();
+    for (int64_t id : c.crossing) if (keep.count(id)) k.crossing.push_back(id);
+    if (!k.crossing.empty()) out.crosswalks.push_back(std::move(k));
+  }
   return out;
 }
 

@@ -513,6 +513,7 @@ EvalReport evaluate(const map::LaneMap& truth_map, const map::LaneMap& built_map
     d.mean_rms_m = meanOf(road_rms[id]);
     r.roads.push_back(d);
   }
+  r.regulatory = scoreRegulatory(truth_map, built_map, o.regulatory);
   return r;
 }
 
@@ -599,6 +600,8 @@ nlohmann::json toJson(const EvalReport& r) {
     lanes.push_back(l);
   }
   j["lanes_detail"] = lanes;
+  const json regulatory = toJson(r.regulatory);
+  for (auto it = regulatory.begin(); it != regulatory.end(); ++it) j[it.key()] = it.value();
   return j;
 }
 
@@ -621,6 +624,16 @@ std::string summary(const EvalReport& r) {
   s << ", boundary";
   for (const auto& [thr, v] : r.ap_boundary.ap) s << " " << fmt(v);
   s << ")\n";
+  const RegulatoryScores& g = r.regulatory;
+  s << "stop lines:    truth " << g.stop_lines.truth << ", built " << g.stop_lines.built << ", matched "
+    << g.stop_lines.matched << "  precision " << fmt(g.stop_lines.precision()) << "  recall "
+    << fmt(g.stop_lines.recall()) << "  error " << fmt(g.stop_lines.error_m()) << " m  rules agree "
+    << g.rules_agreeing << "/" << g.rules_compared << "\n";
+  s << "crosswalks:    truth " << g.crosswalks.truth << ", built " << g.crosswalks.built << ", matched "
+    << g.crosswalks.matched << "  precision " << fmt(g.crosswalks.precision()) << "  recall "
+    << fmt(g.crosswalks.recall()) << "  error " << fmt(g.crosswalks.error_m()) << " m\n";
+  s << "lane change:   accuracy " << fmt(g.laneChangeAccuracy()) << " (" << g.lane_change_correct << " of "
+    << g.lane_change_matched << " matched shared lines; " << g.lane_change_truth << " in the truth)\n";
   return s.str();
 }
 

@@ -39,6 +39,7 @@
 // Ratios with a zero denominator are NaN (JSON null).
 #pragma once
 
+#include "core/eval/regulatory.h"
 #include "core/geo/local_frame.h"
 #include "core/map/lane_map.h"
 
@@ -60,6 +61,7 @@ struct EvalOptions {
   size_t chamfer_points = 100;    // MapTR
   std::vector<double> chamfer_thresholds{0.5, 1.0, 1.5};
   double duplicate_chamfer_m = 0.05;
+  RegulatoryOptions regulatory;  // stop lines, crosswalks, rules, lane change (regulatory.h)
 };
 
 // One lane (a chain of road lanelets) of either map.
@@ -118,13 +120,15 @@ struct EvalReport {
   std::map<double, double> chamfer_ap;  // mean over classes
   std::vector<RoadDetail> roads;
   size_t repaired_polygons = 0;  // lane polygons that needed the quadrilateral fallback
+  RegulatoryScores regulatory;   // stop lines, crosswalks, rules, lane-change permission
 };
 
 EvalReport evaluate(const map::LaneMap& truth, const map::LaneMap& built, const EvalOptions& options = {});
 
 // The report as JSON: lanes.{precision, recall, rms_m, miou, ...}, intersections.{precision,
 // recall, rms_m, ...}, lane_graph.{precision, recall}, chamfer_ap.{"0.5", "1.0", "1.5", centre,
-// boundary}, roads[] (per-road detail), lanes_detail[] (per truth lane). NaN -> null.
+// boundary}, roads[] (per-road detail), lanes_detail[] (per truth lane), and stop_lines,
+// crosswalks, rules, lane_change (regulatory.h toJson). NaN -> null.
 nlohmann::json toJson(const EvalReport& report);
 // A few human-readable lines.
 std::string summary(const EvalReport& report);

@@ -217,6 +217,8 @@ class NodeTable {
 struct IdPlan {
   std::unordered_map<int64_t, int64_t> way_of_line;
   std::unordered_map<int64_t, int64_t> relation_of_lanelet;
+  std::unordered_map<int64_t, int64_t> relation_of_regulatory;  // RegulatoryElement id -> relation
+  std::unordered_map<int64_t, int64_t> relation_of_crosswalk;   // Crosswalk id -> lanelet relation
   int64_t next_free = 1;
 };
 
@@ -233,9 +235,19 @@ IdPlan planIds(const LaneMap& map) {
     keep = keep && ll.id > 0 && used.insert(ll.id).second;
     max_id = std::max(max_id, ll.id);
   }
+  for (const auto& r : map.regulatory_elements) {
+    keep = keep && r.id > 0 && used.insert(r.id).second;
+    max_id = std::max(max_id, r.id);
+  }
+  for (const auto& c : map.crosswalks) {
+    keep = keep && c.id > 0 && used.insert(c.id).second;
+    max_id = std::max(max_id, c.id);
+  }
   int64_t next = 1;
   for (const auto& l : map.lines) plan.way_of_line[l.id] = keep ? l.id : next++;
   for (const auto& ll : map.lanelets) plan.relation_of_lanelet[ll.id] = keep ? ll.id : next++;
+  for (const auto& r : map.regulatory_elements) plan.relation_of_regulatory[r.id] = keep ? r.id : next++;
+  for (const auto& c : map.crosswalks) plan.relation_of_crosswalk[c.id] = keep ? c.id : next++;
   plan.next_free = keep ? max_id + 1 : next;
   return plan;
 }
@@ -298,6 +310,39 @@ void validateForWriting(const LaneMap& map, const Lanelet2WriteOptions& options,
     if (options.check_orientation) {
       const std::string problem = orientationProblem(ll, *left->second, *right->second);
       if (!problem.empty()) fail(problem);
+    }
+  }
+  std::unordered_set<int64_t> element_ids;
+  for (const auto& r : map.regulatory_elements) {
+    const std::string what = "regulatory element " + std::to_string(r.id);
+    if (!element_ids.insert(r.id).second) fail("duplicate regulatory element id " + std::to_string(r.id));
+    const auto stop = lines.find(r.stop_line_id);
+    if (stop == lines.end()) fail(what + " refers to missing stop line " + std::to_string(r.stop_line_id));
+    if (stop->second->points.size() < 2) fail(what + ": its stop line has fewer than 2 points");
+    if (r.lanelets.empty()) fail(what + " applies to no lanelet");
+    for (const auto* ids : {&r.lanelets, &r.priority}) {
+      for (int64_t id : *ids) {
+        if (!lanelet_ids.count(id)) fail(what + " refers to missing lanelet " + std::to_string(id));
+      }
+    }
+    if (r.kind == map::RegulatoryKind::kTrafficLight) {
+      if (r.light.size() < 2) fail(what + " (traffic light) has no light line of 2 points");
+      for (const auto& p : r.light) {
+        if (!p.allFinite()) fail(what + " has a non-finite light point");
+      }
+    }
+  }
+  for (const auto& c : map.crosswalks) {
+    const std::string what = "crosswalk " + std::to_string(c.id);
+    if (!element_ids.insert(c.id).second) fail("duplicate crosswalk id " + std::to_string(c.id));
+    if (c.left.size() < 2 || c.right.size() < 2) fail(what + " has an edge with fewer than 2 points");
+    for (const auto* edge : {&c.left, &c.right}) {
+      for (const auto& p : *edge) {
+        if (!p.allFinite()) fail(what + " has a non-finite point");
+      }
+    }
+    for (int64_t id : c.crossing) {
+      if (!lanelet_ids.count(id)) fail(what + " refers to missing lanelet " + std::to_string(id));
     }
   }
 }
@@ -494,12 +539,49 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
   }
   // A stop line becomes Autoware's `road_marking` regulatory element (a stop line with no sign
   // or light of its own: the camera sees the paint only), referenced by the lanelet it ends.
+  // Only for a stop line that no regulatory element of the map (sign, light) has as its ref_line.
+  std::set<int64_t> ruled_stop_lines;
+  for (const auto& r : map.regulatory_elements) ruled_stop_lines.insert(r.stop_line_id);
   std::map<int64_t, int64_t> marking_of_stop_line;  // line id -> regulatory element id
   for (const auto& ll : map.lanelets) {
     if (!options.stop_line_road_markings) break;
-    if (ll.stop_line_id && !marking_of_stop_line.count(*ll.stop_line_id)) {
+    if (ll.stop_line_id && !ruled_stop_lines.count(*ll.stop_line_id) && !marking_of_stop_line.count(*ll.stop_line_id)) {
       marking_of_stop_line[*ll.stop_line_id] = ids.next_free++;
     }
+  }
+  // Ways of the regulatory elements and crosswalks: a traffic light's line, a crosswalk's two
+  // edges (and in Autoware's layout its polygon and regulatory element).
+  std::unordered_map<int64_t, int64_t> light_way;  // RegulatoryElement id -> way
+  for (const auto& r : map.regulatory_elements) {
+    if (r.kind == map::RegulatoryKind::kTrafficLight) light_way[r.id] = ids.next_free++;
+  }
+  struct CrosswalkIds {
+    int64_t left = 0, right = 0, polygon = 0, element = 0;
+  };
+  std::unordered_map<int64_t, CrosswalkIds> crosswalk_ids;
+  for (const auto& c : map.crosswalks) {
+    CrosswalkIds& w = crosswalk_ids[c.id];
+    w.left = ids.next_free++;
+    w.right = ids.next_free++;
+    if (options.crosswalk_regulatory_elements) {
+      w.polygon = ids.next_free++;
+      w.element = ids.next_free++;
+    }
+  }
+  // The regulatory elements each lanelet references (Lanelet2: role regulatory_element).
+  std::unordered_map<int64_t, std::vector<int64_t>> elements_of_lanelet;  // lanelet id -> relations
+  for (const auto& r : map.regulatory_elements) {
+    const int64_t rel = ids.relation_of_regulatory.at(r.id);
+    std::set<int64_t> seen;
+    for (const auto* v : {&r.lanelets, &r.priority}) {
+      for (int64_t id : *v) {
+        if (seen.insert(id).second) elements_of_lanelet[id].push_back(rel);
+      }
+    }
+  }
+  for (const auto& c : map.crosswalks) {
+    if (!options.crosswalk_regulatory_elements) break;
+    for (int64_t id : c.crossing) elements_of_lanelet[id].push_back(crosswalk_ids.at(c.id).element);
   }
   const int64_t first_node_id = ids.next_free;
   NodeTable nodes(first_node_id);
@@ -521,6 +603,26 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
     // type=virtual: Lanelet2 knows no `centerline` type; the member role makes it the centre line.
     appendWay(ways_xml, it->second, wayNodes(nodes, ll.centre), {{"type", "virtual"}});
   }
+  for (const auto& r : map.regulatory_elements) {
+    const auto it = light_way.find(r.id);
+    if (it == light_way.end()) continue;
+    // Lanelet2/Autoware: the light's bottom edge, `height` the light's own height.
+    appendWay(ways_xml, it->second, wayNodes(nodes, r.light),
+              {{"type", "traffic_light"}, {"subtype", "red_yellow_green"}, {"height", formatDouble("%.2f", r.light_height_m)}});
+  }
+  for (const auto& c : map.crosswalks) {
+    const CrosswalkIds& w = crosswalk_ids.at(c.id);
+    // The edges of the crossing: no paint of their own (the stripes lie between them).
+    appendWay(ways_xml, w.left, wayNodes(nodes, c.left), {{"type", "virtual"}});
+    appendWay(ways_xml, w.right, wayNodes(nodes, c.right), {{"type", "virtual"}});
+    if (w.polygon) {
+      std::vector<Eigen::Vector3d> ring = c.left;
+      ring.insert(ring.end(), c.right.rbegin(), c.right.rend());
+      std::vector<int64_t> refs = wayNodes(nodes, ring);
+      if (refs.size() > 2 && refs.front() != refs.back()) refs.push_back(refs.front());
+      appendWay(ways_xml, w.polygon, refs, {{"type", "crosswalk_polygon"}, {"area", "yes"}});
+    }
+  }
 
   nlohmann::ordered_json lanelets_json = nlohmann::ordered_json::object();
   std::string rel_xml;
@@ -534,9 +636,14 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
     member(ids.way_of_line.at(ll.right_id), "right");
     const auto centre = centre_way_of_lanelet.find(ll.id);
     if (centre != centre_way_of_lanelet.end()) member(centre->second, "centerline");
-    if (ll.stop_line_id && options.stop_line_road_markings) {
-      rel_xml += "    <member type=\"relation\" ref=\"" + std::to_string(marking_of_stop_line.at(*ll.stop_line_id)) +
-                 "\" role=\"regulatory_element\"/>\n";
+    const auto relation_member = [&](int64_t rel, const char* role) {
+      rel_xml += "    <member type=\"relation\" ref=\"" + std::to_string(rel) + "\" role=\"" + role + "\"/>\n";
+    };
+    if (ll.stop_line_id && marking_of_stop_line.count(*ll.stop_line_id)) {
+      relation_member(marking_of_stop_line.at(*ll.stop_line_id), "regulatory_element");
+    }
+    if (const auto els = elements_of_lanelet.find(ll.id); els != elements_of_lanelet.end()) {
+      for (int64_t rel : els->second) relation_member(rel, "regulatory_element");
     }
     appendTag(rel_xml, "type", "lanelet");
     appendTag(rel_xml, "subtype", "road");
@@ -558,6 +665,74 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
     if (ll.turn != TurnDirection::kNone) j["turn"] = turnTag(ll.turn);
     if (ll.stop_line_id) j["stop_line"] = ids.way_of_line.at(*ll.stop_line_id);
     lanelets_json[std::to_string(rel_id)] = std::move(j);
+  }
+
+  nlohmann::ordered_json elements_json = nlohmann::ordered_json::object();
+  for (const auto& r : map.regulatory_elements) {
+    const int64_t rel = ids.relation_of_regulatory.at(r.id);
+    rel_xml += "  <relation id=\"" + std::to_string(rel) + "\" version=\"1\" visible=\"true\">\n";
+    const auto way_member = [&](int64_t way, const char* role) {
+      rel_xml += "    <member type=\"way\" ref=\"" + std::to_string(way) + "\" role=\"" + role + "\"/>\n";
+    };
+    const auto lanelet_members = [&](const std::vector<int64_t>& v, const char* role) {
+      for (int64_t id : v) {
+        rel_xml += "    <member type=\"relation\" ref=\"" + std::to_string(ids.relation_of_lanelet.at(id)) +
+                   "\" role=\"" + role + "\"/>\n";
+      }
+    };
+    const bool right_of_way = r.kind == map::RegulatoryKind::kGiveWay && !r.priority.empty();
+    if (r.kind == map::RegulatoryKind::kTrafficLight) way_member(light_way.at(r.id), "refers");
+    if (right_of_way) {
+      lanelet_members(r.priority, "right_of_way");
+      lanelet_members(r.lanelets, "yield");
+    }
+    way_member(ids.way_of_line.at(r.stop_line_id), "ref_line");
+    appendTag(rel_xml, "type", "regulatory_element");
+    if (r.kind == map::RegulatoryKind::kTrafficLight) {
+      appendTag(rel_xml, "subtype", "traffic_light");
+    } else if (right_of_way) {
+      appendTag(rel_xml, "subtype", "right_of_way");
+    } else {
+      // Lanelet2's TrafficSign takes its type from `sign_type` when it has no sign of its own
+      // (the camera maps no sign); stop_sign is the value Autoware's stop line module looks for.
+      appendTag(rel_xml, "subtype", "traffic_sign");
+      appendTag(rel_xml, "sign_type", r.kind == map::RegulatoryKind::kStopSign ? "stop_sign" : "give_way");
+    }
+    rel_xml += "  </relation>\n";
+    nlohmann::ordered_json j;
+    j["kind"] = map::toString(r.kind);
+    j["osm_node"] = r.osm_node;
+    if (r.kind == map::RegulatoryKind::kTrafficLight) j["light_position"] = r.light_estimated ? "estimated" : "measured";
+    elements_json[std::to_string(rel)] = std::move(j);
+  }
+  nlohmann::ordered_json crosswalks_json = nlohmann::ordered_json::object();
+  for (const auto& c : map.crosswalks) {
+    const CrosswalkIds& w = crosswalk_ids.at(c.id);
+    const int64_t rel = ids.relation_of_crosswalk.at(c.id);
+    rel_xml += "  <relation id=\"" + std::to_string(rel) + "\" version=\"1\" visible=\"true\">\n";
+    rel_xml += "    <member type=\"way\" ref=\"" + std::to_string(w.left) + "\" role=\"left\"/>\n";
+    rel_xml += "    <member type=\"way\" ref=\"" + std::to_string(w.right) + "\" role=\"right\"/>\n";
+    appendTag(rel_xml, "type", "lanelet");
+    appendTag(rel_xml, "subtype", "crosswalk");
+    appendTag(rel_xml, "location", options.location);
+    appendTag(rel_xml, "one_way", "no");
+    rel_xml += "  </relation>\n";
+    if (w.element) {
+      // Autoware's crosswalk regulatory element (vector map requirement vm-05-01): refers = the
+      // crosswalk lanelet, crosswalk_polygon = its area; the road lanelets under it reference it.
+      rel_xml += "  <relation id=\"" + std::to_string(w.element) + "\" version=\"1\" visible=\"true\">\n";
+      rel_xml += "    <member type=\"relation\" ref=\"" + std::to_string(rel) + "\" role=\"refers\"/>\n";
+      rel_xml += "    <member type=\"way\" ref=\"" + std::to_string(w.polygon) + "\" role=\"crosswalk_polygon\"/>\n";
+      appendTag(rel_xml, "type", "regulatory_element");
+      appendTag(rel_xml, "subtype", "crosswalk");
+      rel_xml += "  </relation>\n";
+    }
+    nlohmann::ordered_json j;
+    j["road_id"] = c.road_id;
+    std::vector<int64_t> crossing;
+    for (int64_t id : c.crossing) crossing.push_back(ids.relation_of_lanelet.at(id));
+    j["crossing"] = crossing;
+    crosswalks_json[std::to_string(rel)] = std::move(j);
   }
 
   for (const auto& [line_id, reg_id] : marking_of_stop_line) {
@@ -602,6 +777,8 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
                   "in the frame of `origin`, node ids first_node_id, first_node_id + 1, ...";
   side["origin"] = {{"lat", map.origin_lat}, {"lon", map.origin_lon}, {"alt", map.origin_alt}};
   side["lanelets"] = std::move(lanelets_json);
+  if (!map.regulatory_elements.empty()) side["regulatory_elements"] = std::move(elements_json);
+  if (!map.crosswalks.empty()) side["crosswalks"] = std::move(crosswalks_json);
   side["first_node_id"] = first_node_id;
   side["local_xy"] = std::move(local_xy);
   doc.sidecar = side.dump() + "\n";
@@ -652,6 +829,7 @@ void writeAutowareMapFolder(const LaneMap& map, const std::string& dir, const La
   o.write_projector_info = true;
   o.turn_direction_tags = true;
   o.stop_line_road_markings = true;
+  o.crosswalk_regulatory_elements = true;
   writeLanelet2(map, (std::filesystem::path(dir) / "lanelet2_map.osm").string(), o);
 }
 
@@ -667,7 +845,7 @@ struct RawNode {
 
 struct RawWay {
   std::vector<int64_t> refs;
-  std::string type, subtype;
+  std::string type, subtype, height;
 };
 
 struct RawMember {
@@ -712,6 +890,7 @@ class Collector : public osmium::handler::Handler {
     for (const auto& nr : w.nodes()) out.refs.push_back(nr.ref());
     if (const char* v = w.tags().get_value_by_key("type")) out.type = v;
     if (const char* v = w.tags().get_value_by_key("subtype")) out.subtype = v;
+    if (const char* v = w.tags().get_value_by_key("height")) out.height = v;
   }
 
   void relation(const osmium::Relation& r) {
@@ -819,6 +998,19 @@ struct ReadLanelet {
   std::optional<int64_t> stop_way;
 };
 
+// The kind of a regulatory element relation as lanemap models it; nullopt for any other element.
+// Traffic signs: Autoware's stop_sign, Lanelet2's German (de206 stop, de205 give way) and US
+// (usR1-1, usR1-2) sign types, from `sign_type` or the subtype of the first `refers` sign.
+std::optional<map::RegulatoryKind> regulatoryKindOf(const std::string& subtype, const std::string& sign) {
+  if (subtype == "traffic_light") return map::RegulatoryKind::kTrafficLight;
+  if (subtype == "right_of_way") return map::RegulatoryKind::kGiveWay;
+  if (subtype == "traffic_sign") {
+    if (sign == "stop_sign" || sign == "stop" || sign == "de206" || sign == "usR1-1") return map::RegulatoryKind::kStopSign;
+    if (sign == "give_way" || sign == "yield" || sign == "de205" || sign == "usR1-2") return map::RegulatoryKind::kGiveWay;
+  }
+  return std::nullopt;
+}
+
 // The sidecar of an OSM file whose bytes hash to `hash`: MAP.lanemap.json when it matches, else
 // any *.lanemap.json in the same folder that names the hash (a renamed copy of the map). Only the
 // first bytes of each candidate are read until one matches.
@@ -875,6 +1067,7 @@ struct Sidecar {
   std::unordered_map<int64_t, nlohmann::json> lanelets;
   int64_t first_node_id = 0;
   std::vector<double> local_xy;
+  nlohmann::json extra = nlohmann::json::object();  // regulatory_elements, crosswalks (if any)
 };
 
 Sidecar parseSidecar(const std::string& path, const std::string& osm_path) {
@@ -898,6 +1091,12 @@ Sidecar parseSidecar(const std::string& path, const std::string& osm_path) {
     }
     side.first_node_id = j.at("first_node_id").get<int64_t>();
     side.local_xy = j.at("local_xy").get<std::vector<double>>();
+    for (const char* section : {"regulatory_elements", "crosswalks"}) {
+      if (j.contains(section)) {
+        if (!j.at(section).is_object()) throw bad(std::string(section) + " is not an object");
+        side.extra[section] = j.at(section);
+      }
+    }
   } catch (const Lanelet2Error&) {
     throw;
   } catch (const std::exception& e) {
@@ -924,11 +1123,14 @@ class Lanelet2Reader {
 
   Lanelet2File read() {
     collectLanelets();
+    collectRegulatoryWays();
     decideCoordinates();
     for (auto& rl : lanelets_) buildBounds(rl);
     buildLines();
     for (auto& rl : lanelets_) buildCentre(rl);
     findSuccessors();
+    buildRegulatoryElements();
+    buildCrosswalks();
     for (auto& rl : lanelets_) out_.map.lanelets.push_back(std::move(rl.lanelet));
     return std::move(out_);
   }
@@ -954,11 +1156,18 @@ class Lanelet2Reader {
 
   // The stop line of a foreign lanelet: a stop_line way that one of its regulatory elements
   // (traffic light, right of way, ...) names as `ref_line`.
-  std::optional<int64_t> stopLineFromRegulatoryElements(const RawRelation& rel) const {
+  std::optional<int64_t> stopLineFromRegulatoryElements(int64_t lanelet_id, const RawRelation& rel) const {
     for (const auto& m : rel.members) {
       if (m.kind != 'r' || m.role != "regulatory_element") continue;
       const auto reg = raw_.relations.find(m.ref);
       if (reg == raw_.relations.end()) continue;
+      // A right of way's ref_line is the stop line of its yield lanelets only.
+      if (reg->second.tag("subtype") == "right_of_way" &&
+          std::none_of(reg->second.members.begin(), reg->second.members.end(), [&](const RawMember& rm) {
+            return rm.kind == 'r' && rm.role == "yield" && rm.ref == lanelet_id;
+          })) {
+        continue;
+      }
       const bool marking = reg->second.tag("subtype") == "road_marking";  // Autoware: refers = the marking
       for (const auto& rm : reg->second.members) {
         if (rm.kind != 'w' || (rm.role != "ref_line" && !(marking && rm.role == "refers"))) continue;
@@ -973,6 +1182,11 @@ class Lanelet2Reader {
     for (const auto& [id, rel] : raw_.relations) {
       if (rel.tag("type") != "lanelet") continue;
       const std::string subtype = rel.tag("subtype");
+      if (subtype == "crosswalk") {
+        collectCrosswalk(id, rel);
+        out_.lanelet_subtype[id] = subtype;
+        continue;
+      }
       if (!keepSubtype(subtype)) continue;
       ReadLanelet rl;
       rl.lanelet.id = id;
@@ -1044,7 +1258,7 @@ class Lanelet2Reader {
       rl.stop_way = parseInteger(stop, path_, where + "lanemap:stop_line");
       way(*rl.stop_way, ll.id);
     } else {
-      rl.stop_way = stopLineFromRegulatoryElements(rel);
+      rl.stop_way = stopLineFromRegulatoryElements(ll.id, rel);
     }
   }
 
@@ -1085,6 +1299,7 @@ class Lanelet2Reader {
     for (const auto& [way_id, w] : raw_.ways) {
       if (isStandaloneLine(way_id, w)) add(way_id);
     }
+    for (int64_t way_id : aux_ways_) add(way_id);
     return used;
   }
 
@@ -1093,6 +1308,7 @@ class Lanelet2Reader {
   bool isStandaloneLine(int64_t way_id, const RawWay& w) const {
     if (w.refs.size() < 2 || (w.type != "virtual" && lineTypeOf(w) == LineType::kVirtual)) return false;
     if (centre_ways_.count(way_id)) return false;  // a lanelet's centre line, not a marking
+    if (aux_ways_.count(way_id)) return false;     // a crosswalk's edge or a traffic light
     return std::all_of(w.refs.begin(), w.refs.end(), [&](int64_t n) {
       const auto it = raw_.nodes.find(n);
       return it != raw_.nodes.end() && it->second.located;
@@ -1255,6 +1471,7 @@ class Lanelet2Reader {
     if (reversed) std::reverse(line.points.begin(), line.points.end());
     out_.line_tag[id] = w.subtype.empty() ? w.type : w.type + ":" + w.subtype;
     out_.map.lines.push_back(std::move(line));
+    if (!reversed || !line_of_way_.count(way_id)) line_of_way_[way_id] = id;
   }
 
   void buildCentre(ReadLanelet& rl) {
@@ -1308,6 +1525,172 @@ class Lanelet2Reader {
     }
   }
 
+  // A crosswalk lanelet (subtype=crosswalk): kept apart from the lanes, in map.crosswalks.
+  struct ReadCrosswalk {
+    int64_t id = 0;
+    int64_t left = 0, right = 0;
+    bool left_inverted = false, right_inverted = false;
+  };
+
+  void collectCrosswalk(int64_t id, const RawRelation& rel) {
+    ReadCrosswalk c;
+    c.id = id;
+    int lefts = 0, rights = 0;
+    for (const auto& m : rel.members) {
+      if (m.kind != 'w') continue;
+      const bool inverted = m.role.find("inverted") != std::string::npos;
+      const bool is_left = m.role == "left" || (inverted && m.role.find("left") != std::string::npos);
+      const bool is_right = m.role == "right" || (inverted && m.role.find("right") != std::string::npos);
+      if (!is_left && !is_right) continue;
+      way(m.ref, id);  // must exist
+      (is_left ? c.left : c.right) = m.ref;
+      (is_left ? c.left_inverted : c.right_inverted) = inverted;
+      (is_left ? lefts : rights)++;
+    }
+    if (lefts != 1 || rights != 1) {
+      malformed("crosswalk lanelet " + std::to_string(id) + " has " + std::to_string(lefts) + " left and " +
+                std::to_string(rights) + " right bounds (expected one each)");
+    }
+    aux_ways_.insert(c.left);
+    aux_ways_.insert(c.right);
+    crosswalks_.push_back(c);
+  }
+
+  const nlohmann::json* sidecarEntry(const char* section, int64_t id) const {
+    if (!sidecar_ || !sidecar_->extra.contains(section)) return nullptr;
+    const auto& sec = sidecar_->extra.at(section);
+    const auto it = sec.find(std::to_string(id));
+    return it == sec.end() ? nullptr : &*it;
+  }
+
+  // The regulatory elements lanemap models (stop and give-way signs, right of way, traffic
+  // lights) whose ref_line is a stop line of the map and which apply to a lanelet that was read.
+  // Collected before the coordinates are decided (the lights' nodes must get positions).
+  void collectRegulatoryWays() {
+    for (const auto& [id, rel] : raw_.relations) {
+      if (rel.tag("type") != "regulatory_element" || rel.tag("subtype") != "traffic_light") continue;
+      for (const auto& m : rel.members) {
+        const auto w = raw_.ways.find(m.ref);
+        if (m.kind == 'w' && m.role == "refers" && w != raw_.ways.end() && w->second.refs.size() >= 2 &&
+            std::all_of(w->second.refs.begin(), w->second.refs.end(), [&](int64_t n) {
+              const auto it = raw_.nodes.find(n);
+              return it != raw_.nodes.end() && it->second.located;
+            })) {
+          aux_ways_.insert(m.ref);
+          break;
+        }
+      }
+    }
+  }
+
+  void buildRegulatoryElements() {
+    std::set<int64_t> kept;
+    std::map<int64_t, std::vector<int64_t>> users;  // regulatory element -> lanelets referencing it
+    for (const auto& rl : lanelets_) kept.insert(rl.lanelet.id);
+    for (const auto& [id, rel] : raw_.relations) {
+      if (rel.tag("type") != "lanelet" || !kept.count(id)) continue;
+      for (const auto& m : rel.members) {
+        if (m.kind == 'r' && m.role == "regulatory_element") users[m.ref].push_back(id);
+      }
+    }
+    for (const auto& [id, rel] : raw_.relations) {
+      if (rel.tag("type") != "regulatory_element") continue;
+      std::string sign = rel.tag("sign_type");
+      std::optional<int64_t> stop_way, light_way;
+      std::vector<int64_t> yield, priority;
+      for (const auto& m : rel.members) {
+        if (m.kind == 'w' && m.role == "ref_line" && !stop_way) stop_way = m.ref;
+        if (m.kind == 'w' && m.role == "refers" && !light_way) {
+          light_way = m.ref;
+          if (sign.empty()) {
+            if (const auto w = raw_.ways.find(m.ref); w != raw_.ways.end()) sign = w->second.subtype;
+          }
+        }
+        if (m.kind == 'r' && m.role == "yield" && kept.count(m.ref)) yield.push_back(m.ref);
+        if (m.kind == 'r' && m.role == "right_of_way" && kept.count(m.ref)) priority.push_back(m.ref);
+      }
+      const auto kind = regulatoryKindOf(rel.tag("subtype"), sign);
+      if (!kind || !stop_way || !line_of_way_.count(*stop_way)) continue;
+      map::RegulatoryElement r;
+      r.id = id;
+      r.kind = *kind;
+      r.light_estimated = false;  // unless the sidecar says so
+      r.stop_line_id = line_of_way_.at(*stop_way);
+      if (rel.tag("subtype") == "right_of_way") {
+        r.lanelets = yield;
+        r.priority = priority;
+      } else if (const auto u = users.find(id); u != users.end()) {
+        r.lanelets = u->second;
+      }
+      if (r.lanelets.empty()) continue;
+      if (r.kind == map::RegulatoryKind::kTrafficLight) {
+        if (!light_way || !aux_ways_.count(*light_way)) continue;
+        std::vector<int64_t> ids;
+        wayGeometry(*light_way, id, ids, r.light);
+        const std::string& h = raw_.ways.at(*light_way).height;
+        if (!h.empty()) r.light_height_m = parseNumber(h, path_, "height of way " + std::to_string(*light_way));
+        r.light_estimated = false;
+      }
+      if (const nlohmann::json* j = sidecarEntry("regulatory_elements", id)) {
+        try {
+          r.osm_node = j->value("osm_node", int64_t{-1});
+          r.light_estimated = j->value("light_position", std::string()) == "estimated";
+        } catch (const std::exception& e) {
+          throw Lanelet2Error("malformed lanemap sidecar '" + sidecar_->path + "' of '" + path_ +
+                              "': regulatory element " + std::to_string(id) + " " + e.what());
+        }
+      }
+      out_.map.regulatory_elements.push_back(std::move(r));
+    }
+  }
+
+  void buildCrosswalks() {
+    std::set<int64_t> kept;
+    for (const auto& rl : lanelets_) kept.insert(rl.lanelet.id);
+    // Autoware's crosswalk elements: crosswalk lanelet (refers) -> road lanelets referencing them.
+    std::map<int64_t, std::vector<int64_t>> crossing_of;
+    for (const auto& [id, rel] : raw_.relations) {
+      if (rel.tag("type") != "lanelet" || !kept.count(id)) continue;
+      for (const auto& m : rel.members) {
+        if (m.kind != 'r' || m.role != "regulatory_element") continue;
+        const auto reg = raw_.relations.find(m.ref);
+        if (reg == raw_.relations.end() || reg->second.tag("subtype") != "crosswalk") continue;
+        for (const auto& rm : reg->second.members) {
+          if (rm.kind == 'r' && rm.role == "refers") crossing_of[rm.ref].push_back(id);
+        }
+      }
+    }
+    for (const auto& c : crosswalks_) {
+      map::Crosswalk cw;
+      cw.id = c.id;
+      std::vector<int64_t> ids;
+      wayGeometry(c.left, c.id, ids, cw.left);
+      wayGeometry(c.right, c.id, ids, cw.right);
+      if (c.left_inverted) std::reverse(cw.left.begin(), cw.left.end());
+      if (c.right_inverted) std::reverse(cw.right.begin(), cw.right.end());
+      if (cw.left.size() < 2 || cw.right.size() < 2) {
+        malformed("crosswalk lanelet " + std::to_string(c.id) + " has a bound with fewer than 2 nodes");
+      }
+      const Alignment a = lanelet2Alignment(cw.left, cw.right);
+      if (a.invert_left) std::reverse(cw.left.begin(), cw.left.end());
+      if (a.invert_right) std::reverse(cw.right.begin(), cw.right.end());
+      if (const nlohmann::json* j = sidecarEntry("crosswalks", c.id)) {
+        try {
+          cw.road_id = j->value("road_id", int64_t{-1});
+          for (int64_t id : j->value("crossing", std::vector<int64_t>{})) {
+            if (kept.count(id)) cw.crossing.push_back(id);
+          }
+        } catch (const std::exception& e) {
+          throw Lanelet2Error("malformed lanemap sidecar '" + sidecar_->path + "' of '" + path_ + "': crosswalk " +
+                              std::to_string(c.id) + " " + e.what());
+        }
+      } else if (const auto it = crossing_of.find(c.id); it != crossing_of.end()) {
+        cw.crossing = it->second;
+      }
+      out_.map.crosswalks.push_back(std::move(cw));
+    }
+  }
+
   std::string path_;
   Lanelet2ReadOptions options_;
   geo::LocalFrame frame_;
@@ -1319,6 +1702,9 @@ class Lanelet2Reader {
   std::optional<Sidecar> sidecar_;
   mutable std::optional<geo::LocalFrame> writer_frame_;
   std::set<int64_t> centre_ways_;
+  std::set<int64_t> aux_ways_;  // crosswalk edges and traffic lights: not lines of the map
+  std::vector<ReadCrosswalk> crosswalks_;
+  std::map<int64_t, int64_t> line_of_way_;  // way id -> LineString id (its forward line)
 };
 
 }  // namespace

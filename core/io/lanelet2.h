@@ -19,9 +19,23 @@
 // - Points closer than 5 cm (Lanelet2's points_too_close limit) are one node in the file.
 // - Lanelet2 has no successor tags; successors are recovered from shared end/start points.
 // - Stop lines are ways type=stop_line; the lanelet that ends at one names it in the sidecar (and
-//   in Autoware's layout references a road_marking regulatory element referring to it). The
+//   in Autoware's layout, when no regulatory element below has it as ref_line, references a
+//   road_marking regulatory element referring to it). The
 //   reader also takes a stop line from a regulatory element's `ref_line` member (traffic lights,
 //   right of way) or a road_marking's `refers` in foreign maps.
+// - Regulatory elements (map::RegulatoryElement): a stop sign is a `traffic_sign` with
+//   sign_type=stop_sign (Autoware's value; Lanelet2 takes the type from sign_type when no sign is
+//   mapped) and the stop line as `ref_line`; give way is a `right_of_way` (yield = the lanelets
+//   ending at the stop line, right_of_way = the priority lanelets, ref_line = the stop line), or a
+//   traffic_sign sign_type=give_way when no lanelet has priority; a traffic light is a
+//   `traffic_light` whose `refers` is a way type=traffic_light (its bottom edge, `height`) and
+//   whose ref_line is the stop line. Every lanelet an element applies to references it (role
+//   regulatory_element). That a light's position is an estimate (the camera maps none) is in the
+//   sidecar ("light_position": "estimated"): Lanelet2's validator knows no tag for it.
+// - Crosswalks (map::Crosswalk) are lanelets subtype=crosswalk, one_way=no, with virtual edges;
+//   Autoware's layout adds its crosswalk regulatory element (crosswalk_regulatory_elements). The
+//   reader puts every subtype=crosswalk lanelet into map.crosswalks (never into map.lanelets,
+//   whatever Lanelet2ReadOptions::subtypes says) and reads the elements above back.
 // - The centre line is written as a way (type=virtual) with member role `centerline`, which
 //   Lanelet2 loads as the lanelet's centreline; without it the reader averages the two bounds.
 // - Autoware's tags: `lane_change` (yes on a dashed line between two same-direction lanes, no on
@@ -66,6 +80,11 @@ struct Lanelet2WriteOptions {
   // has fits a stop line alone (a traffic sign or light needs its sign, right of way the priority
   // of the roads); so only Autoware's folder layout writes them.
   bool stop_line_road_markings = false;
+  // Autoware's crosswalk regulatory element (refers = the crosswalk lanelet, crosswalk_polygon =
+  // a polygon way type=crosswalk_polygon) referenced by the road lanelets the crosswalk crosses.
+  // Plain Lanelet2 implements no crosswalk element (a load error each), so only Autoware's layout
+  // writes them; the crosswalk lanelet itself (subtype=crosswalk) is in every map.
+  bool crosswalk_regulatory_elements = false;
   std::string location = "urban";  // `location` of every lanelet (urban, nonurban, private)
   // `speed_limit` (km/h) of a road's lanelets: OSM maxspeed by lanelet road_id (speedLimitsKmh),
   // else this default (40 km/h = 25 mph, the US residential default; intersection lanelets take

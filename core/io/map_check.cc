@@ -191,13 +191,14 @@ std::vector<CheckResult> checkLanelet2Map(const std::string& path, const MapChec
     }
   }
   {
-    auto& c = add("lanelet_tags", "every lanelet has subtype, location, one_way and a numeric speed_limit (lanelet ids)");
+    auto& c = add("lanelet_tags", "every lanelet has subtype, location, one_way and (but a crosswalk or walkway) a numeric speed_limit (lanelet ids)");
     for (const auto& l : lanelets) {
       const auto& t = l.rel->tags;
       const std::string v = tag(t, "speed_limit");
       char* end = nullptr;
       const double speed = v.empty() ? 0.0 : std::strtod(v.c_str(), &end);
-      const bool numeric = !v.empty() && end && *end == '\0' && speed > 0.0;
+      const bool pedestrian = tag(t, "subtype") == "crosswalk" || tag(t, "subtype") == "walkway";
+      const bool numeric = pedestrian || (!v.empty() && end && *end == '\0' && speed > 0.0);
       if (tag(t, "subtype").empty() || tag(t, "location").empty() || tag(t, "one_way").empty() || !numeric) {
         c.offenders.push_back(l.id);
       }
@@ -321,6 +322,75 @@ std::vector<CheckResult> checkLanelet2Map(const std::string& path, const MapChec
       if (!referenced.count(id)) c.offenders.push_back(id);
     }
     c.applicable = stops > 0;
+  }
+  {
+    // The regulatory elements lanemap writes, as Lanelet2 and Autoware need them.
+    auto& c = add("regulatory_elements",
+                  "every traffic_sign, traffic_light and right_of_way element is referenced by a lanelet, its ref_line "
+                  "(at most one) is a stop_line; a traffic light refers a type=traffic_light way, a traffic sign has "
+                  "sign_type or a sign, a right of way has yield and right_of_way lanelets (relation ids)");
+    std::set<int64_t> used;
+    for (const auto& l : lanelets) {
+      for (const auto& m : l.rel->members) {
+        if (m.kind == 'r' && m.role == "regulatory_element") used.insert(m.ref);
+      }
+    }
+    size_t n = 0;
+    for (const auto& [id, r] : osm.relations) {
+      const std::string sub = tag(r.tags, "subtype");
+      if (tag(r.tags, "type") != "regulatory_element" ||
+          (sub != "traffic_sign" && sub != "traffic_light" && sub != "right_of_way")) {
+        continue;
+      }
+      ++n;
+      size_t ref_lines = 0, lights = 0, signs = 0, yields = 0, priorities = 0;
+      bool ok = used.count(id) > 0;
+      for (const auto& m : r.members) {
+        const auto w = m.kind == 'w' ? osm.ways.find(m.ref) : osm.ways.end();
+        const std::string wtype = w != osm.ways.end() ? tag(w->second.tags, "type") : "";
+        if (m.role == "ref_line") {
+          ++ref_lines;
+          ok = ok && wtype == "stop_line";
+        }
+        if (m.role == "refers") {
+          lights += wtype == "traffic_light";
+          signs += wtype == "traffic_sign";
+        }
+        if (m.kind == 'r' && m.role == "yield") ++yields;
+        if (m.kind == 'r' && m.role == "right_of_way") ++priorities;
+      }
+      ok = ok && ref_lines <= 1;
+      if (sub == "traffic_light") ok = ok && lights > 0;
+      if (sub == "traffic_sign") ok = ok && (signs > 0 || !tag(r.tags, "sign_type").empty());
+      if (sub == "right_of_way") ok = ok && yields > 0 && priorities > 0;
+      if (!ok) c.offenders.push_back(id);
+    }
+    c.applicable = n > 0;
+  }
+  if (options.autoware) {
+    auto& c = add("crosswalk_refs",
+                  "every crosswalk lanelet is the refers of a crosswalk regulatory element that a road lanelet "
+                  "references (Autoware vm-05-01; lanelet ids)");
+    std::set<int64_t> used;
+    for (const auto& l : lanelets) {
+      for (const auto& m : l.rel->members) {
+        if (m.kind == 'r' && m.role == "regulatory_element") used.insert(m.ref);
+      }
+    }
+    std::set<int64_t> referred;
+    for (const auto& [id, r] : osm.relations) {
+      if (tag(r.tags, "type") != "regulatory_element" || tag(r.tags, "subtype") != "crosswalk" || !used.count(id)) continue;
+      for (const auto& m : r.members) {
+        if (m.kind == 'r' && m.role == "refers") referred.insert(m.ref);
+      }
+    }
+    size_t n = 0;
+    for (const auto& l : lanelets) {
+      if (tag(l.rel->tags, "subtype") != "crosswalk") continue;
+      ++n;
+      if (!referred.count(l.id)) c.offenders.push_back(l.id);
+    }
+    c.applicable = n > 0;
   }
   {
     auto& c = add("one_lanelet_per_intersection_path",

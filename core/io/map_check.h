@@ -3,7 +3,8 @@
 // when there is one, says which lanelets are intersection lanelets). Each requirement passes or
 // fails with the ids that break it:
 //   ele               every node has `ele` (Autoware: ellipsoidal height on every point)
-//   lanelet_tags      every lanelet has subtype, location, one_way and a numeric speed_limit
+//   lanelet_tags      every lanelet has subtype, location, one_way and (but crosswalks and
+//                     walkways) a numeric speed_limit
 //   lane_change       every line string that is the right bound of one lanelet and the left bound of
 //                     another (two lanes of one direction) has lane_change=yes|no, yes exactly on
 //                     dashed lines (line_thin/line_thick subtype dashed)
@@ -19,6 +20,12 @@
 //   stop_line_refs    (Autoware layout only) every stop_line line string is referenced by a
 //                     regulatory element: as its ref_line (traffic light, traffic sign, right of
 //                     way) or as the `refers` of Autoware's road_marking
+//   regulatory_elements every traffic_sign / traffic_light / right_of_way element is referenced by
+//                     a lanelet and has at most one ref_line, a stop_line; a light refers a
+//                     type=traffic_light way, a sign has sign_type (or a sign), a right of way has
+//                     yield and right_of_way lanelets
+//   crosswalk_refs    (Autoware layout only) every crosswalk lanelet is the `refers` of a crosswalk
+//                     regulatory element that a road lanelet references
 //   projector_info    (Autoware layout only) map_projector_info.yaml beside the map
 #pragma once
 

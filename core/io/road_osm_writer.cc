@@ -75,8 +75,16 @@ std::string toRoadOsmXml(const osm::OsmData& data, const RoadOsmOptions& options
   }
   for (int64_t id : used_nodes) {
     const osm::Node& n = data.nodes.at(id);
+    const auto tags = options.node_tags.find(id);
     out += "  <node id=\"" + std::to_string(id) + "\" version=\"1\" visible=\"true\" lat=\"" +
-           coord(n.lat) + "\" lon=\"" + coord(n.lon) + "\"/>\n";
+           coord(n.lat) + "\" lon=\"" + coord(n.lon) + "\"";
+    if (tags == options.node_tags.end() || tags->second.empty()) {
+      out += "/>\n";
+    } else {
+      out += ">\n";
+      for (const auto& [k, v] : tags->second) appendTag(out, k, v);
+      out += "  </node>\n";
+    }
   }
   for (const auto* w : ways) {
     out += "  <way id=\"" + std::to_string(w->id) + "\" version=\"1\" visible=\"true\">\n";

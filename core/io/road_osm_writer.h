@@ -7,12 +7,16 @@
 #include "core/io/atomic_file.h"
 #include "core/osm/osm_data.h"
 
+#include <map>
 #include <string>
 
 namespace lanemap::io {
 
 struct RoadOsmOptions {
   bool keep_lane_tags = false;  // keep lanes*, *:lanes*, width*, placement* (see isLaneTag)
+  // Tags written on the nodes of these ids that the file has (OsmData keeps no node tags): e.g.
+  // the junction controls highway=stop|give_way|traffic_signals (intersections::readControlNodes).
+  std::map<int64_t, osm::Tags> node_tags;
 };
 
 // Keys that describe lanes: `lanes`, `lanes:*`, any `*:lanes` / `*:lanes:*` (turn:lanes,

@@ -38,4 +38,13 @@ const char* toString(TurnDirection t) {
   return "?";
 }
 
+const char* toString(RegulatoryKind k) {
+  switch (k) {
+    case RegulatoryKind::kStopSign: return "stop_sign";
+    case RegulatoryKind::kGiveWay: return "give_way";
+    case RegulatoryKind::kTrafficLight: return "traffic_light";
+  }
+  return "?";
+}
+
 }  // namespace lanemap::map

@@ -51,12 +51,47 @@ struct Lanelet {
   std::optional<int64_t> stop_line_id;  // LineString at the lanelet's end, if any
 };
 
+// A traffic rule at a stop line (Lanelet2 regulatory elements; see core/io/lanelet2.h for how each is
+// written): the OSM control of the junction approach (highway=stop / give_way / traffic_signals)
+// at a stop line of the map.
+enum class RegulatoryKind : uint8_t {
+  kStopSign,      // Lanelet2 traffic_sign, sign_type=stop_sign, ref_line = the stop line
+  kGiveWay,       // right_of_way: yield = `lanelets`, right_of_way = `priority`, ref_line = the stop line
+                  // (a traffic_sign with sign_type=give_way when no lanelet has priority)
+  kTrafficLight,  // traffic_light: refers = the light (`light`), ref_line = the stop line
+};
+
+struct RegulatoryElement {
+  int64_t id = 0;
+  RegulatoryKind kind = RegulatoryKind::kStopSign;
+  int64_t stop_line_id = 0;          // LineString of type kStopLine
+  std::vector<int64_t> lanelets;     // the lanelets that end at the stop line (they must obey/yield)
+  std::vector<int64_t> priority;     // kGiveWay: lanelets with right of way (other approaches)
+  // kTrafficLight: the light's bottom edge (2 points, ENU) and height (m). The camera does not map
+  // lights: this is an estimate (light_estimated) above the middle of the stop line.
+  std::vector<Eigen::Vector3d> light;
+  double light_height_m = 1.0;
+  bool light_estimated = true;
+  int64_t osm_node = -1;             // the OSM node whose highway=* tag gave the rule, if known
+};
+
+// A pedestrian crossing (Lanelet2 lanelet subtype=crosswalk): its two edges in the walking
+// direction (left edge on the walker's left), and the road lanelets it crosses.
+struct Crosswalk {
+  int64_t id = 0;
+  std::vector<Eigen::Vector3d> left, right;  // ENU, both from one curb to the other
+  std::vector<int64_t> crossing;             // road lanelet ids under it
+  int64_t road_id = -1;                      // lanemap: the atomic road it lies on, if known
+};
+
 struct LaneMap {
   double origin_lat = 0.0;  // ENU origin (degrees, metres)
   double origin_lon = 0.0;
   double origin_alt = 0.0;
   std::vector<LineString> lines;
   std::vector<Lanelet> lanelets;
+  std::vector<RegulatoryElement> regulatory_elements;
+  std::vector<Crosswalk> crosswalks;
 
   const LineString* line(int64_t id) const;
   const Lanelet* lanelet(int64_t id) const;
@@ -64,5 +99,6 @@ struct LaneMap {
 
 const char* toString(LineType t);
 const char* toString(TurnDirection t);
+const char* toString(RegulatoryKind k);  // "stop_sign", "give_way", "traffic_light"
 
 }  // namespace lanemap::map

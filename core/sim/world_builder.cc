@@ -220,7 +220,9 @@ class Builder {
     computeNodeInfo();
     for (auto& xs : xss_) buildCrossSection(xs);
     for (const auto& in : sk_.intersections()) buildIntersection(in);
+    shareOpposedIntersectionBounds();
     placeObstacles();
+    for (auto& cw : truth().crosswalks) cw.id = nextId();
     fillStats();
     impl_->finalize();
     return std::move(impl_);
@@ -1109,6 +1111,92 @@ class Builder {
       std::vector<Vector2d> poly = {at(xs, a, d), at(xs, b, d), at(xs, b, d + kStripe), at(xs, a, d + kStripe)};
       addFill(Surface::kCrosswalkPaint, detail::kLayerCrosswalk, std::move(poly));
     }
+    // The truth's crosswalk lanelet: its two edges (s = a and s = b) from one curb to the other,
+    // the left edge on the walker's left; the road lanelets of both directions under it.
+    map::Crosswalk cw;
+    cw.id = 0;  // given in run(), after every line and lanelet (their ids stay as they were)
+    cw.road_id = xs.ref->id;
+    const auto edge = [&](double s) {
+      std::vector<Vector3d> e;
+      for (double d : {d_lo, d_hi}) {
+        const Vector2d p = at(xs, s, d);
+        const double l = m_ * v[cl], r = m_ * v[cr];
+        e.emplace_back(p.x(), p.y(), terrainAt(p) + profileAt(xs, s, m_ * d, std::max(l, r), std::min(l, r)));
+      }
+      return e;
+    };
+    std::vector<Vector3d> ea = edge(a), eb = edge(b);
+    const Vector2d w = (ea.back() - ea.front()).head<2>(), q = (eb.front() - ea.front()).head<2>();
+    const bool b_left = w.x() * q.y() - w.y() * q.x() > 0.0;
+    cw.left = b_left ? eb : ea;
+    cw.right = b_left ? ea : eb;
+    for (int k = 0; k < 2; ++k) cw.crossing.insert(cw.crossing.end(), sec.lanes[k].begin(), sec.lanes[k].end());
+    truth().crosswalks.push_back(std::move(cw));
+  }
+
+  // Intersection lanelets whose bounds lie on top of each other share one line string: two of
+  // opposite directions along the road's centre line carried through a junction (two opposed
+  // straight-on paths, or a left turn and the opposing right turn; the second uses it reversed, as
+  // the road lanelets of both directions share their centre line), and two side by side in one
+  // direction. Two copies of one border are what Autoware's requirements (lanemap-check
+  // shared_borders) forbid.
+  void shareOpposedIntersectionBounds() {
+    auto& t = truth();
+    std::map<int64_t, std::vector<size_t>> by_intersection;
+    for (size_t i = 0; i < t.lanelets.size(); ++i) {
+      if (t.lanelets[i].kind == LaneletKind::kIntersection) by_intersection[t.lanelets[i].intersection_id].push_back(i);
+    }
+    const auto near = [](const Vector3d& a, const Vector3d& b) { return (a - b).head<2>().norm() < 0.02; };
+    const auto onTop = [&](const LineString& a, const LineString& b, bool reversed) {
+      if (a.points.size() < 2 || b.points.size() < 2) return false;
+      const Vector3d& b0 = reversed ? b.points.back() : b.points.front();
+      const Vector3d& b1 = reversed ? b.points.front() : b.points.back();
+      if (!near(a.points.front(), b0) || !near(a.points.back(), b1)) return false;
+      const auto inside = [](const LineString& p, const LineString& q) {  // every point of p on q
+        for (const auto& x : p.points) {
+          double best = 1e9;
+          for (size_t k = 0; k + 1 < q.points.size(); ++k) {
+            const Vector2d u = q.points[k].head<2>(), v = q.points[k + 1].head<2>();
+            const double len2 = (v - u).squaredNorm();
+            const double f = len2 > 0.0 ? std::clamp((x.head<2>() - u).dot(v - u) / len2, 0.0, 1.0) : 0.0;
+            best = std::min(best, (u + f * (v - u) - x.head<2>()).norm());
+          }
+          if (best > 0.02) return false;
+        }
+        return true;
+      };
+      return inside(a, b) && inside(b, a);
+    };
+    std::unordered_map<int64_t, int> uses;  // a line another lanelet also uses stays
+    for (const auto& l : t.lanelets) {
+      ++uses[l.left_id];
+      ++uses[l.right_id];
+      if (l.stop_line_id) ++uses[*l.stop_line_id];
+    }
+    std::set<int64_t> dropped;
+    for (const auto& [id, idx] : by_intersection) {
+      for (size_t a = 0; a < idx.size(); ++a) {
+        for (size_t b = a + 1; b < idx.size(); ++b) {
+          Lanelet& la = t.lanelets[idx[a]];
+          Lanelet& lb = t.lanelets[idx[b]];
+          // lb's bound `mine` becomes la's bound `theirs` when they lie on top of each other.
+          const auto share = [&](int64_t& mine, int64_t theirs, bool reversed) {
+            if (mine == theirs || dropped.count(mine) || dropped.count(theirs) || uses[mine] != 1) return;
+            if (!onTop(lineRef(theirs), lineRef(mine), reversed)) return;
+            dropped.insert(mine);
+            mine = theirs;
+          };
+          share(lb.left_id, la.left_id, true);    // opposite directions, the centre line
+          share(lb.left_id, la.right_id, false);  // side by side in one direction: lb right of la
+          share(lb.right_id, la.left_id, false);  // lb left of la
+        }
+      }
+    }
+    if (dropped.empty()) return;
+    t.lines.erase(std::remove_if(t.lines.begin(), t.lines.end(), [&](const LineString& l) { return dropped.count(l.id) > 0; }),
+                  t.lines.end());
+    line_pos_.clear();
+    for (size_t i = 0; i < t.lines.size(); ++i) line_pos_[t.lines[i].id] = i;
   }
 
   void emitStopLine(const CrossSection& xs, const Section& sec, int k, double s) {

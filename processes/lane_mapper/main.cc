@@ -10,9 +10,11 @@
 //
 //   lanemap-lane-mapper --config config/lane_mapper.yaml [--osm FILE] [--store DIR]
 #include "core/bev/bev_grid.h"
+#include "core/intersections/regulatory.h"
 #include "core/io/lanelet2.h"
 #include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
+#include "core/lanes/stop_lines.h"
 #include "core/mapping/map_assembler.h"
 #include "core/skeleton/skeleton.h"
 #include "lanemap/bev_road_t.hpp"
@@ -127,6 +129,11 @@ class LaneMapperApp {
     const lanes::ExplorationResult res = lanes::exploreRoad(grid, lanes::RoadGeometry::fromSkeleton(*road), options_);
     const auto& o = sk_->frame().origin();
     map::LaneMap m = lanes::toLaneMap(res, o.lat, o.lon, o.alt);
+    lanes::addStopLines(grid, m);  // stop lines the BEV saw at the lanes' ends
+    int64_t next_id = 1;
+    for (const auto& l : m.lines) next_id = std::max(next_id, l.id + 1);
+    for (const auto& l : m.lanelets) next_id = std::max(next_id, l.id + 1);
+    m.crosswalks = lanes::findCrosswalks(grid, m, next_id);  // kept with the road's file
     io::writeLanelet2(m, roadFile(job.road_id), write_options_);  // atomic: a crash leaves the old file or the new one
     {
       std::lock_guard<std::mutex> lock(roads_mutex_);
@@ -149,7 +156,11 @@ class LaneMapperApp {
     mapping::MapAssembler assembler(*sk_, intersection_options_, restrictions_);
     for (const auto& [id, m] : roads_) assembler.setRoad(id, m);
     std::vector<std::string> failures;
-    const map::LaneMap all = assembler.map(&failures);
+    map::LaneMap all = assembler.map(&failures);
+    intersections::addRegulatoryElements(all, *sk_, controls_);  // OSM stop / give way / signals
+    std::vector<map::Crosswalk> crosswalks;
+    for (const auto& [id, m] : roads_) crosswalks.insert(crosswalks.end(), m.crosswalks.begin(), m.crosswalks.end());
+    lanes::addCrosswalks(all, std::move(crosswalks));  // both directions of a crossing merged
     for (const auto& f : failures) std::cerr << "lane_mapper: " << f << " failed, the rest is mapped\n";
     process_.counters().set("intersections_failed", static_cast<int64_t>(failures.size()));
     if (!all.lanelets.empty()) io::writeLanelet2(all, wholeMapFile(), write_options_);
@@ -218,6 +229,12 @@ class LaneMapperApp {
   std::map<int64_t, map::LaneMap> roads_;
   intersections::IntersectionOptions intersection_options_;
   std::vector<osm::Restriction> restrictions_;
+  std::unordered_map<int64_t, intersections::ControlNode> controls_;  // set before spin()
+
+ public:
+  void setControls(std::unordered_map<int64_t, intersections::ControlNode> c) { controls_ = std::move(c); }
+
+ private:
   io::Lanelet2WriteOptions write_options_;
   std::thread worker_;
 };
@@ -242,6 +259,7 @@ int main(int argc, char** argv) {
     std::cerr << "lane_mapper: " << sk->roads().size() << " atomic roads from " << osm << ", store " << store << "\n";
     LaneMapperApp app(process, std::move(sk), settings.explorer, store, settings.bev_channel, settings.queue_capacity,
                       settings.intersections, osm_data.restrictions);
+    app.setControls(lanemap::intersections::readControlNodes(osm));
     return process.spin();
   } catch (const std::exception& e) {
     std::cerr << "lane_mapper: " << e.what() << "\n";

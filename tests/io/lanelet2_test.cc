@@ -476,7 +476,7 @@ double distanceToRing(const std::vector<Eigen::Vector2d>& ring, const Eigen::Vec
 TEST(Lanelet2, ReadsKarlsruheExample) {
   const Lanelet2File f = readLanelet2File(kKarlsruhe, 49.0, 8.4);
   // grep -c "<tag k='type' v='lanelet' />" data/lanelet2/karlsruhe_mapping_example.osm  -> 371
-  EXPECT_EQ(f.map.lanelets.size(), 371u);
+  EXPECT_EQ(f.map.lanelets.size(), 363u);  // and 8 crosswalks
   // Lanelets per subtype, from the relation blocks of the file:
   //   awk "/<relation /{r=1;t=\"\";s=\"\"} r&&/k='type'/{match(\$0,/v='[^']*'/);t=substr(\$0,RSTART+3,RLENGTH-4)}
   //        r&&/k='subtype'/{match(\$0,/v='[^']*'/);s=substr(\$0,RSTART+3,RLENGTH-4)}
@@ -488,7 +488,9 @@ TEST(Lanelet2, ReadsKarlsruheExample) {
   EXPECT_EQ(per_subtype["bicycle_lane"], 14u);
   EXPECT_EQ(per_subtype["crosswalk"], 8u);
   EXPECT_EQ(per_subtype["highway"], 8u);
-  EXPECT_EQ(f.map.lanelets.size(), f.lanelet_subtype.size());
+  // Crosswalk lanelets are map.crosswalks, every other lanelet a lane of map.lanelets.
+  EXPECT_EQ(f.map.lanelets.size() + f.map.crosswalks.size(), f.lanelet_subtype.size());
+  EXPECT_EQ(f.map.crosswalks.size(), 8u);
   EXPECT_FALSE(f.used_local_xy);
   // Lanelet2's validator reports no issue on this map, so every lanelet is well oriented after
   // alignment.
@@ -783,6 +785,188 @@ TEST(Lanelet2, AutowareTagsLaneChangeSpeedLimitTurnDirection) {
   EXPECT_NE(info.find("  latitude: 49.0000000000\n"), std::string::npos) << info;
   EXPECT_NE(info.find("  longitude: 8.4000000000\n"), std::string::npos) << info;
   EXPECT_NE(info.find("  altitude: 112.5000\n"), std::string::npos) << info;
+}
+
+// handMadeMap with one regulatory element of `kind` at stop line 6 (end of lanelet 101; give way:
+// lanelet 100 has priority) and crosswalk 300 across both lanes (x = 20..23, walking north).
+LaneMap withRules(map::RegulatoryKind kind, bool priority = true) {
+  LaneMap m = handMadeMap();
+  map::RegulatoryElement r;
+  r.id = 200;
+  r.kind = kind;
+  r.stop_line_id = 6;
+  r.lanelets = {101};
+  if (kind == map::RegulatoryKind::kGiveWay && priority) r.priority = {100};
+  if (kind == map::RegulatoryKind::kTrafficLight) {
+    r.light = {{50.0, -1.95, 5.5}, {50.0, -1.55, 5.5}};
+    r.light_height_m = 1.2;
+    r.light_estimated = true;
+  }
+  r.osm_node = 4242;
+  m.regulatory_elements.push_back(r);
+  map::Crosswalk c;
+  c.id = 300;
+  c.left = {{20.0, -3.5, 0.2}, {20.0, 3.5, 0.2}};  // walking north: x = 20 is on the left
+  c.right = {{23.0, -3.5, 0.23}, {23.0, 3.5, 0.23}};
+  c.crossing = {100, 101};
+  c.road_id = 7;
+  m.crosswalks.push_back(c);
+  return m;
+}
+
+TEST(Lanelet2, RegulatoryElementsAndCrosswalksRoundTrip) {
+  using map::RegulatoryKind;
+  struct Case {
+    RegulatoryKind kind;
+    bool priority;
+    const char* subtype;
+    const char* sign_type;  // nullptr: none
+  };
+  for (const Case& k : {Case{RegulatoryKind::kStopSign, false, "traffic_sign", "stop_sign"},
+                        Case{RegulatoryKind::kGiveWay, true, "right_of_way", nullptr},
+                        Case{RegulatoryKind::kGiveWay, false, "traffic_sign", "give_way"},
+                        Case{RegulatoryKind::kTrafficLight, false, "traffic_light", nullptr}}) {
+    SCOPED_TRACE(std::string(k.subtype) + (k.priority ? " with priority" : ""));
+    const LaneMap m = withRules(k.kind, k.priority);
+    const std::string path = tempPath(std::string("rules_") + k.subtype + (k.priority ? "_p" : "") + ".osm");
+    writeLanelet2(m, path);
+    const FileStats s = statsOf(path);
+    ASSERT_TRUE(s.relation_tags.count(200));
+    const auto& tags = s.relation_tags.at(200);
+    EXPECT_EQ(tags.at("type"), "regulatory_element");
+    EXPECT_EQ(tags.at("subtype"), k.subtype);
+    if (k.sign_type) EXPECT_EQ(tags.at("sign_type"), k.sign_type);
+    else EXPECT_EQ(tags.count("sign_type"), 0u);
+    EXPECT_EQ(s.relation_members.at(200).at("ref_line"), 6);
+    EXPECT_EQ(s.relation_members.at(101).at("regulatory_element"), 200);
+    if (k.priority) {
+      EXPECT_EQ(s.relation_members.at(200).at("right_of_way"), 100);
+      EXPECT_EQ(s.relation_members.at(200).at("yield"), 101);
+      EXPECT_EQ(s.relation_members.at(100).at("regulatory_element"), 200);
+    } else {
+      EXPECT_EQ(s.relation_members.at(100).count("regulatory_element"), 0u);
+    }
+    if (k.kind == RegulatoryKind::kTrafficLight) {
+      const int64_t light = s.relation_members.at(200).at("refers");
+      EXPECT_EQ(s.way_nodes.at(light).size(), 2u);
+    }
+    // The crosswalk lanelet, with the tags Lanelet2 knows; its edges are ways of their own.
+    const auto& cw = s.relation_tags.at(300);
+    EXPECT_EQ(cw.at("type"), "lanelet");
+    EXPECT_EQ(cw.at("subtype"), "crosswalk");
+    EXPECT_EQ(cw.at("one_way"), "no");
+    EXPECT_EQ(cw.at("location"), "urban");
+    EXPECT_EQ(s.relation_members.at(100).count("crosswalk"), 0u);
+
+    // Read back (with the sidecar): everything as written.
+    Lanelet2ReadOptions ro;
+    ro.origin_alt = m.origin_alt;
+    const Lanelet2File f = readLanelet2File(path, 49.0, 8.4, ro);
+    ASSERT_EQ(f.map.lanelets.size(), 3u);  // the crosswalk is not a lane
+    ASSERT_EQ(f.map.regulatory_elements.size(), 1u);
+    const auto& r = f.map.regulatory_elements[0];
+    EXPECT_EQ(r.id, 200);
+    EXPECT_EQ(r.kind, k.kind);
+    EXPECT_EQ(r.stop_line_id, 6);
+    EXPECT_EQ(r.lanelets, (std::vector<int64_t>{101}));
+    EXPECT_EQ(r.priority, k.priority ? std::vector<int64_t>{100} : std::vector<int64_t>{});
+    EXPECT_EQ(r.osm_node, 4242);
+    ASSERT_TRUE(f.map.line(6));
+    EXPECT_EQ(f.map.line(6)->type, LineType::kStopLine);
+    EXPECT_EQ(f.map.lanelet(101)->stop_line_id.value_or(-1), 6);
+    EXPECT_FALSE(f.map.lanelet(100)->stop_line_id.has_value());
+    if (k.kind == RegulatoryKind::kTrafficLight) {
+      EXPECT_TRUE(r.light_estimated);
+      EXPECT_NEAR(r.light_height_m, 1.2, 1e-9);
+      EXPECT_LT(maxPointDistance(r.light, m.regulatory_elements[0].light), 1e-3);
+    }
+    ASSERT_EQ(f.map.crosswalks.size(), 1u);
+    const auto& c = f.map.crosswalks[0];
+    EXPECT_EQ(c.id, 300);
+    EXPECT_EQ(c.crossing, (std::vector<int64_t>{100, 101}));
+    EXPECT_EQ(c.road_id, 7);
+    // The left edge starts 1.6 cm from a node of curb 3 (x = 20): one node (points < 5 cm merge).
+    EXPECT_LT(maxPointDistance(c.left, m.crosswalks[0].left), 0.02);
+    EXPECT_LT(maxPointDistance(c.right, m.crosswalks[0].right), 1e-3);
+    // No line of the map came from the crosswalk's edges or the light.
+    EXPECT_EQ(f.map.lines.size(), m.lines.size());
+
+    // Without the sidecar (a foreign reader's view): the rule from the OSM tags alone.
+    std::filesystem::remove(lanelet2SidecarPath(path));
+    const LaneMap bare = readLanelet2(path, 49.0, 8.4, ro);
+    ASSERT_EQ(bare.regulatory_elements.size(), 1u);
+    EXPECT_EQ(bare.regulatory_elements[0].kind, k.kind);
+    EXPECT_EQ(bare.regulatory_elements[0].lanelets, (std::vector<int64_t>{101}));
+    EXPECT_FALSE(bare.regulatory_elements[0].light_estimated);  // nothing says so
+    ASSERT_EQ(bare.crosswalks.size(), 1u);
+    EXPECT_TRUE(bare.crosswalks[0].crossing.empty());  // plain Lanelet2 links them by geometry
+    EXPECT_LT(maxPointDistance(bare.crosswalks[0].left, m.crosswalks[0].left), 0.02);
+  }
+}
+
+TEST(Lanelet2, AutowareLayoutLinksCrosswalksAndRulesToTheirLanelets) {
+  const LaneMap m = withRules(map::RegulatoryKind::kStopSign);
+  const std::string dir = tempPath("autoware_rules");
+  writeAutowareMapFolder(m, dir);
+  const std::string path = dir + "/lanelet2_map.osm";
+  const FileStats s = statsOf(path);
+  // Stop line 6 has a stop sign: no road_marking of its own.
+  for (const auto& [id, tags] : s.relation_tags) EXPECT_NE(tags.count("subtype") ? tags.at("subtype") : "", "road_marking") << id;
+  // Autoware's crosswalk element: refers = the crosswalk lanelet, crosswalk_polygon = a closed way.
+  int64_t element = 0;
+  for (const auto& [id, tags] : s.relation_tags) {
+    if (tags.count("type") && tags.at("type") == "regulatory_element" && tags.at("subtype") == "crosswalk") element = id;
+  }
+  ASSERT_NE(element, 0);
+  EXPECT_EQ(s.relation_members.at(element).at("refers"), 300);
+  const auto& ring = s.way_nodes.at(s.relation_members.at(element).at("crosswalk_polygon"));
+  EXPECT_EQ(ring.size(), 5u);
+  EXPECT_EQ(ring.front(), ring.back());
+  // Lanelet 100 references the crosswalk element; 101 both it and the stop sign (the map's
+  // relation_members keeps one per role: the last, the crosswalk's).
+  EXPECT_EQ(s.relation_members.at(100).at("regulatory_element"), element);
+  std::filesystem::remove(lanelet2SidecarPath(path));
+  const LaneMap back = readLanelet2(path, 49.0, 8.4);
+  ASSERT_EQ(back.crosswalks.size(), 1u);
+  EXPECT_EQ(back.crosswalks[0].crossing, (std::vector<int64_t>{100, 101}));  // from the element
+  ASSERT_EQ(back.regulatory_elements.size(), 1u);
+  EXPECT_EQ(back.regulatory_elements[0].kind, map::RegulatoryKind::kStopSign);
+}
+
+TEST(Lanelet2, MalformedRulesInTheSidecarThrowWithItsPath) {
+  const std::string path = tempPath("rules_bad_sidecar.osm");
+  writeLanelet2(withRules(map::RegulatoryKind::kTrafficLight), path);
+  const std::string side = lanelet2SidecarPath(path);
+  std::string text = readText(side);
+  const auto at = text.find("\"osm_node\":4242");
+  ASSERT_NE(at, std::string::npos) << text.substr(0, 400);
+  text.replace(at, std::string("\"osm_node\":4242").size(), "\"osm_node\":\"x\"");
+  writeText(side, text);
+  try {
+    readLanelet2(path, 49.0, 8.4);
+    FAIL() << "no throw";
+  } catch (const Lanelet2Error& e) {
+    EXPECT_NE(std::string(e.what()).find(side), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("regulatory element 200"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Lanelet2, WriterRejectsBrokenRules) {
+  LaneMap m = withRules(map::RegulatoryKind::kTrafficLight);
+  m.regulatory_elements[0].stop_line_id = 99;
+  EXPECT_THROW(toLanelet2Xml(m), Lanelet2Error);
+  m = withRules(map::RegulatoryKind::kTrafficLight);
+  m.regulatory_elements[0].light.clear();
+  EXPECT_THROW(toLanelet2Xml(m), Lanelet2Error);
+  m = withRules(map::RegulatoryKind::kStopSign);
+  m.regulatory_elements[0].lanelets = {555};
+  EXPECT_THROW(toLanelet2Xml(m), Lanelet2Error);
+  m = withRules(map::RegulatoryKind::kStopSign);
+  m.crosswalks[0].left.pop_back();
+  EXPECT_THROW(toLanelet2Xml(m), Lanelet2Error);
+  m = withRules(map::RegulatoryKind::kStopSign);
+  m.crosswalks[0].id = 200;  // the regulatory element's id
+  EXPECT_THROW(toLanelet2Xml(m), Lanelet2Error);
 }
 
 TEST(Lanelet2, PointsCloserThan5cmAreOneNode) {

@@ -185,13 +185,72 @@ TEST(MapCheck, EachBrokenRuleFailsAlone) {
   }
 }
 
+// goodMap with a traffic light at stop line 6 (element 200, lanelet 101) and crosswalk 300 over
+// lanelets 100 and 101.
+LaneMap ruledMap() {
+  LaneMap m = goodMap();
+  map::RegulatoryElement r;
+  r.id = 200;
+  r.kind = map::RegulatoryKind::kTrafficLight;
+  r.stop_line_id = 6;
+  r.lanelets = {101};
+  r.light = {{50, -1.95, 5}, {50, -1.55, 5}};
+  m.regulatory_elements.push_back(r);
+  map::Crosswalk c;
+  c.id = 300;
+  c.left = {{20, -3.5, 0}, {20, 3.5, 0}};
+  c.right = {{23, -3.5, 0}, {23, 3.5, 0}};
+  c.crossing = {100, 101};
+  m.crosswalks.push_back(c);
+  return m;
+}
+
+TEST(MapCheck, RegulatoryElementsAndCrosswalks) {
+  lt::TempDir dir("check-rules");
+  writeLanelet2(ruledMap(), dir.str("map.osm"));
+  EXPECT_EQ(failures(dir.str("map.osm")), Failures{});
+  bool checked = false;
+  for (const auto& r : checkLanelet2Map(dir.str("map.osm"))) checked |= r.name == "regulatory_elements" && r.applicable;
+  EXPECT_TRUE(checked);
+  writeAutowareMapFolder(ruledMap(), dir.str("aw"));
+  EXPECT_EQ(failures(dir.str("aw/lanelet2_map.osm"), true), Failures{});
+
+  const std::string good = toLanelet2Xml(ruledMap());
+  const auto write = [&](const std::string& name, const std::string& text) {
+    const std::string p = dir.str(name);
+    std::ofstream(p) << text;
+    return p;
+  };
+  {  // the light's ref_line is not a stop line (curb 3 instead of stop line 6)
+    std::string t = good;
+    replaceOnce(t, "ref=\"6\" role=\"ref_line\"", "ref=\"3\" role=\"ref_line\"");
+    EXPECT_EQ(failures(write("ref.osm", t)), (Failures{{"regulatory_elements", {200}}}));
+  }
+  {  // no lanelet references the element
+    std::string t = good;
+    replaceOnce(t, "ref=\"200\" role=\"regulatory_element\"", "ref=\"200\" role=\"other\"");
+    EXPECT_EQ(failures(write("unused.osm", t)), (Failures{{"regulatory_elements", {200}}}));
+  }
+  {  // a traffic light without its light
+    std::string t = good;
+    replaceOnce(t, "role=\"refers\"", "role=\"other\"");
+    EXPECT_EQ(failures(write("nolight.osm", t)), (Failures{{"regulatory_elements", {200}}}));
+  }
+  {  // Autoware's layout: the crosswalk element refers to no crosswalk lanelet
+    std::string t = readText(dir.str("aw/lanelet2_map.osm"));
+    replaceOnce(t, "ref=\"300\" role=\"refers\"", "ref=\"300\" role=\"other\"");
+    std::ofstream(dir.str("aw/edited.osm")) << t;
+    EXPECT_EQ(failures(dir.str("aw/edited.osm"), true), (Failures{{"crosswalk_refs", {300}}}));
+  }
+}
+
 TEST(MapCheck, ToolPrintsEachRuleAndExitsNonZeroOnFailure) {
   lt::TempDir dir("check-tool");
   writeLanelet2(goodMap(), dir.str("map.osm"));
   const auto ok = lt::runCommand(lt::binPath("lanemap-check") + " " + dir.str("map.osm"));
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
   EXPECT_NE(ok.output.find("pass  lane_change"), std::string::npos) << ok.output;
-  EXPECT_NE(ok.output.find("0 of 7 requirements failed"), std::string::npos) << ok.output;
+  EXPECT_NE(ok.output.find("0 of 8 requirements failed"), std::string::npos) << ok.output;
   std::string t = toLanelet2Xml(goodMap());
   replaceOnce(t, "<tag k=\"lane_change\" v=\"yes\"/>", "");
   std::ofstream(dir.str("bad.osm")) << t;

@@ -2,6 +2,7 @@
 // on request), ways, nodes, restrictions and bounds survive, and libosmium / `osmium fileinfo`
 // read the file back.
 #include "core/io/road_osm_writer.h"
+#include "core/intersections/regulatory.h"
 
 #include <gtest/gtest.h>
 
@@ -178,6 +179,34 @@ struct HighwayCollector : osmium::handler::Handler {
     data.ways.push_back(std::move(out));
   }
 };
+
+TEST(RoadOsmWriter, KeepsTheJunctionControlsOfItsNodes) {
+  // West Oakland's highway=stop / traffic_signals nodes survive into the road-level file (the
+  // lane mapper reads its regulatory elements from there).
+  const std::string src = std::string(LANEMAP_DATA_DIR) + "/osm/west-oakland.osm";
+  const osm::OsmData data = osm::readOsm(src);
+  const auto controls = intersections::readControlNodes(src);
+  RoadOsmOptions o;
+  size_t used = 0;
+  for (const auto& [id, c] : controls) {
+    if (!data.nodes.count(id)) continue;  // not on a drivable way: not in the file
+    ++used;
+    o.node_tags[id]["highway"] = intersections::toString(c.control);
+  }
+  ASSERT_GT(used, 0u);
+  const std::string path = tempPath("west_oakland_controls.osm");
+  writeRoadOsm(data, path, o);
+  const auto back = intersections::readControlNodes(path);
+  EXPECT_EQ(back.size(), used);
+  for (const auto& [id, c] : back) {
+    ASSERT_TRUE(controls.count(id)) << id;
+    EXPECT_EQ(c.control, controls.at(id).control) << id;
+    EXPECT_NEAR(c.lat, controls.at(id).lat, 1e-7) << id;
+  }
+  // Without node_tags the nodes carry none.
+  writeRoadOsm(data, path);
+  EXPECT_TRUE(intersections::readControlNodes(path).empty());
+}
 
 TEST(RoadOsmWriter, WestOaklandRoundTripAndOsmiumFileinfo) {
   HighwayCollector c;

@@ -3,12 +3,17 @@
 // routing graph), built from ../shared/tools/lanelet2 (see its README). Each map must give no
 // issue but a bounded number of curvature_too_big warnings (not yet 0: see kTruthCurvatureMax)
 // and route with no load, degenerate or routing error, every lanelet passable and none isolated. Maps: a hand-made one, the simulator's ground truth of a drive, and the map
-// lanemap-offline builds from that short drive.
+// lanemap-offline builds from that short drive (whose stop line must be where the truth has it);
+// hand-made maps with each kind of regulatory element (stop sign, right of way, give-way sign,
+// traffic light) and a crosswalk lanelet.
 //
 // The tools: $LANELET2_BIN, else ~/.cache/lanelet2-1.2.3/bin; when missing they are built once with
 // ../shared/tools/lanelet2/build.sh (about 6 min on 2 cores). Without ../shared (a fresh clone)
 // the tests are skipped, saying so.
+#include "core/eval/area.h"
+#include "core/eval/regulatory.h"
 #include "core/io/lanelet2.h"
+#include "core/io/map_check.h"
 #include "tests/common/sim_drive.h"
 
 #include <gtest/gtest.h>
@@ -174,11 +179,14 @@ void expectClean(const std::string& map, size_t max_curvature) {
   EXPECT_EQ(c.route["load_errors"].get<int>(), 0) << c.route_output;
   EXPECT_EQ(c.route["degenerate"].get<int>(), 0) << c.route_output;
   EXPECT_EQ(c.route["routing_errors"].get<int>(), 0) << c.route_output;
-  EXPECT_EQ(c.route["lanelets"].get<size_t>(), lanelets) << c.route_output;
+  // Crosswalk lanelets load as lanelets too, but no vehicle may pass them.
+  EXPECT_EQ(c.route["lanelets"].get<size_t>(), lanelets + ours.crosswalks.size()) << c.route_output;
   EXPECT_EQ(c.route["passable"].get<size_t>(), lanelets) << c.route_output;
+  EXPECT_EQ(c.route["regulatory_elements"].get<size_t>(), ours.regulatory_elements.size()) << c.route_output;
   EXPECT_EQ(c.route["isolated"].get<size_t>(), unconnected(ours)) << c.route_output;
-  std::printf("%s: %s (%zu curvature); route_check %s\n", fs::path(map).filename().c_str(),
-              lastLine(c.validate_output).c_str(), curvature, c.route.dump().c_str());
+  std::printf("%s: %s (%zu curvature); %zu regulatory elements, %zu crosswalks; route_check %s\n",
+              fs::path(map).filename().c_str(), lastLine(c.validate_output).c_str(), curvature,
+              ours.regulatory_elements.size(), ours.crosswalks.size(), c.route.dump().c_str());
 }
 
 // curvature_too_big warnings left (measured on this drive, seed 7): the truth of the whole world
@@ -226,11 +234,110 @@ TEST(Lanelet2Checks, ToolsSeeADefectiveMap) {
   EXPECT_NE(c.validate_output.find("Point is very close to point"), std::string::npos) << c.validate_output;
 }
 
+// A two-lane road (lanelets 100 left, 101 right, x = 0..60) into intersection lanelets 102/103,
+// and road 104 coming from the north to the same junction (the priority of a right of way). Stop
+// line 6 ends 100 and 101, crosswalk 300 crosses both lanes; one rule of `kind` at the stop line.
+lanemap::map::LaneMap ruledMap(lanemap::map::RegulatoryKind kind, bool priority) {
+  using namespace lanemap::map;
+  LaneMap m;
+  m.origin_lat = 49.0;
+  m.origin_lon = 8.4;
+  m.origin_alt = 100.0;
+  const auto along = [](double x0, double x1, double y) {
+    std::vector<Eigen::Vector3d> p;
+    for (double x = x0; x <= x1 + 1e-9; x += 10.0) p.emplace_back(x, y, 0.0);
+    return p;
+  };
+  const auto ls = [&](int64_t id, LineType t, std::vector<Eigen::Vector3d> p) {
+    LineString l;
+    l.id = id;
+    l.type = t;
+    l.points = std::move(p);
+    m.lines.push_back(l);
+  };
+  ls(1, LineType::kSolid, along(0, 60, 3.5));
+  ls(2, LineType::kDashed, along(0, 60, 0.0));
+  ls(3, LineType::kCurb, along(0, 60, -3.5));
+  ls(4, LineType::kVirtual, along(60, 80, 3.5));
+  ls(5, LineType::kVirtual, along(60, 80, 0.0));
+  ls(7, LineType::kVirtual, along(60, 80, -3.5));
+  ls(6, LineType::kStopLine, {{59.0, 3.5, 0.0}, {59.0, -3.5, 0.0}});
+  // Road 104 from the north (x = 70, y = 60 -> 10), ending where the junction begins.
+  std::vector<Eigen::Vector3d> l104, r104;
+  for (double y = 60.0; y >= 10.0 - 1e-9; y -= 10.0) {
+    l104.emplace_back(73.5, y, 0.0);
+    r104.emplace_back(66.5, y, 0.0);
+  }
+  ls(8, LineType::kCurb, l104);
+  ls(9, LineType::kCurb, r104);
+  const auto lanelet = [&](int64_t id, int64_t l, int64_t r, LaneletKind k) {
+    Lanelet ll;
+    ll.id = id;
+    ll.kind = k;
+    ll.left_id = l;
+    ll.right_id = r;
+    const auto& a = m.line(l)->points;
+    const auto& b = m.line(r)->points;
+    for (size_t i = 0; i < a.size(); ++i) ll.centre.push_back(0.5 * (a[i] + b[i]));
+    m.lanelets.push_back(ll);
+  };
+  lanelet(100, 1, 2, LaneletKind::kRoad);
+  lanelet(101, 2, 3, LaneletKind::kRoad);
+  lanelet(102, 4, 5, LaneletKind::kIntersection);
+  lanelet(103, 5, 7, LaneletKind::kIntersection);
+  lanelet(104, 8, 9, LaneletKind::kRoad);
+  m.lanelets[0].successors = {102};
+  m.lanelets[1].successors = {103};
+  m.lanelets[0].stop_line_id = m.lanelets[1].stop_line_id = 6;
+  RegulatoryElement r;
+  r.id = 200;
+  r.kind = kind;
+  r.stop_line_id = 6;
+  r.lanelets = {100, 101};
+  if (priority) r.priority = {104};
+  if (kind == RegulatoryKind::kTrafficLight) r.light = {{59.0, -0.2, 5.0}, {59.0, 0.2, 5.0}};
+  m.regulatory_elements.push_back(r);
+  Crosswalk c;
+  c.id = 300;
+  c.left = {{50.0, -3.5, 0.0}, {50.0, 3.5, 0.0}};
+  c.right = {{53.0, -3.5, 0.0}, {53.0, 3.5, 0.0}};
+  c.crossing = {100, 101};
+  m.crosswalks.push_back(c);
+  return m;
+}
+
+TEST(Lanelet2Checks, RegulatoryElementsAndCrosswalksGiveNoIssue) {
+  REQUIRE_TOOLS();
+  using lanemap::map::RegulatoryKind;
+  lt::TempDir dir("l2-rules");
+  int n = 0;
+  for (const auto& [kind, priority] : std::vector<std::pair<RegulatoryKind, bool>>{
+           {RegulatoryKind::kStopSign, false}, {RegulatoryKind::kGiveWay, true},
+           {RegulatoryKind::kGiveWay, false}, {RegulatoryKind::kTrafficLight, false}}) {
+    const std::string path = dir.str("rules" + std::to_string(n++) + ".osm");
+    lanemap::io::writeLanelet2(ruledMap(kind, priority), path);
+    SCOPED_TRACE(path);
+    expectClean(path, 0);
+    const Checked c = check(path);
+    EXPECT_EQ(c.route["regulatory_elements"].get<int>(), 1) << c.route_output;
+    EXPECT_EQ(c.route["lanelets"].get<int>(), 6) << c.route_output;  // 5 lanes and the crosswalk
+  }
+}
+
 TEST(Lanelet2Checks, SimulatedGroundTruthHasNoIssueButBoundedCurvature) {
   REQUIRE_TOOLS();
   const std::string d = drive();
   ASSERT_FALSE(d.empty());
   expectClean(d + "/groundtruth.osm", kTruthCurvatureMax);
+  // Autoware's shared borders (lanemap-check): intersection lanelets side by side or opposed along
+  // the centre line share their bound (before the world builder shared them: 74 ways on top of
+  // another). Its regulatory elements are sound.
+  for (const auto& r : lanemap::io::checkLanelet2Map(d + "/groundtruth.osm")) {
+    if (r.name == "shared_borders" || r.name == "regulatory_elements") {
+      EXPECT_TRUE(r.passed) << r.name << ": " << r.offenders.size() << " offenders";
+      EXPECT_TRUE(r.applicable) << r.name;
+    }
+  }
 }
 
 TEST(Lanelet2Checks, MapBuiltFromATestDriveHasNoIssue) {
@@ -245,9 +352,25 @@ TEST(Lanelet2Checks, MapBuiltFromATestDriveHasNoIssue) {
   expectClean(map, kMapCurvatureMax);
   EXPECT_TRUE(fs::exists(out.str("map/map_projector_info.yaml")));
 
+  // The stop line the BEV saw at the end of the drive's first road is in the map where the truth
+  // has it (measured: 0.011 m off), and the rule at it agrees with the truth's (none: OSM has no
+  // control on that approach).
+  {
+    const auto t = lanemap::io::lanelet2WriterOrigin(d + "/groundtruth.osm");
+    ASSERT_TRUE(t.has_value());
+    const auto truth = lanemap::eval::restrictToRoads(lanemap::io::readLanelet2(d + "/groundtruth.osm", t->lat, t->lon),
+                                                      lanemap::eval::drivenRoadsFromScenario(d + "/scenario.json"));
+    const auto s = lanemap::eval::scoreRegulatory(truth, lanemap::io::readLanelet2(map, t->lat, t->lon));
+    EXPECT_EQ(s.stop_lines.truth, 1u);
+    EXPECT_EQ(s.stop_lines.built, 1u);
+    EXPECT_EQ(s.stop_lines.matched, 1u);
+    EXPECT_LT(s.stop_lines.error_m(), 0.3);
+    EXPECT_EQ(s.rules_agreeing, s.rules_compared);
+  }
+
   // Autoware's layout adds turn_direction to the intersection lanelets, a tag plain Lanelet2's
-  // validator does not know, and road_marking regulatory elements for stop lines, which only
-  // Autoware's Lanelet2 extension implements: exactly those issues, nothing else.
+  // validator does not know, and road_marking regulatory elements for stop lines and crosswalk
+  // elements, which only Autoware's Lanelet2 extension implements: exactly those issues.
   const auto o = lanemap::io::lanelet2WriterOrigin(map);
   ASSERT_TRUE(o.has_value());
   const auto built = lanemap::io::readLanelet2(map, o->lat, o->lon);
@@ -262,6 +385,7 @@ TEST(Lanelet2Checks, MapBuiltFromATestDriveHasNoIssue) {
       ++turn_warnings;
     } else if (l.rfind("Warning", 0) == 0 ||
                (l.rfind("Error", 0) == 0 && l.find("road_marking") == std::string::npos &&
+                l.find("type crosswalk") == std::string::npos &&
                 l.find("Failed to get id") == std::string::npos && l.find("Errors ocurred while parsing") == std::string::npos)) {
       ++other;
     }

@@ -2,7 +2,8 @@
 // announced on BEV_ROAD, on a worker thread (a long road does not stall LCM handling), stores the
 // road's lanes in the map store atomically (<store>/lanes/road_<id>.osm, Lanelet2, plus the whole
 // <store>/lane_map.osm) and publishes LANE_MAP. On start it reloads the store and republishes it, so
-// a restart loses no finished road.
+// a restart loses no finished road, and maps the roads whose BEV grid is newer than their lanes
+// (announced while it was down: STATUS roads_caught_up).
 //
 // STATUS latency (per road): from the BEV_ROAD message's receive time (lcm::ReceiveBuffer::recv_utime)
 // to its LANE_MAP published: the wait behind other roads, loading the grid, lane exploration and
@@ -75,6 +76,7 @@ class LaneMapperApp {
     write_options_.speed_limit_kmh_by_road = io::speedLimitsKmh(*sk_);  // OSM maxspeed
     fs::create_directories(fs::path(store_) / "lanes");
     reloadStore();
+    catchUp();
     worker_ = std::thread([this] { work(); });
     auto* sub = process_.lcm().subscribe(channel, &LaneMapperApp::onBevRoad, this);
     sub->setQueueCapacity(queue);
@@ -183,6 +185,29 @@ class LaneMapperApp {
       }
     }
     for (const auto& [id, m] : roads_) publish(id, m, nowUtime());
+  }
+
+  // A road whose BEV grid is in the store but whose lanes are missing or older (its BEV_ROAD came
+  // while this process was down, e.g. killed and restarted): mapped now, as if announced.
+  void catchUp() {
+    const std::regex name("road_(-?[0-9]{1,19})\\.bev");
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(fs::path(store_) / "bev", ec)) {
+      std::smatch mt;
+      const std::string fname = entry.path().filename().string();
+      if (!entry.is_regular_file(ec) || !std::regex_match(fname, mt, name)) continue;
+      const int64_t id = std::stoll(mt[1]);
+      const std::string lanes = roadFile(id);
+      if (fs::exists(lanes, ec) && fs::last_write_time(lanes, ec) >= fs::last_write_time(entry.path(), ec)) continue;
+      Job job;
+      job.road.road_id = id;
+      job.road.path = entry.path().string();
+      job.road.utime = nowUtime();
+      job.recv_utime = nowUtime();
+      jobs_.push_back(job);
+      process_.counters().add("roads_caught_up");
+      std::cerr << "lane_mapper: road " << id << " has a BEV grid but no lanes newer than it: mapping it now\n";
+    }
   }
 
   void publish(int64_t road_id, const map::LaneMap& m, int64_t utime) {

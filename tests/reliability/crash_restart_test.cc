@@ -182,4 +182,38 @@ TEST(CrashRestart, RoadTrackerKilledMidRoadFindsTheCarAgainAndNoRoadIsLost) {
   EXPECT_LT(same.lane_rms_m, 0.05);
 }
 
+TEST(CrashRestart, LaneMapperDownWhenARoadClosesMapsItOnRestart) {
+  if (!lt::inPrivateNetns()) {
+    ASSERT_EQ(lt::rerunInPrivateNetns(), 0);
+    return;
+  }
+  const std::string drive = lt::sharedSimDrive("osm/west-oakland.osm", lt::kBevDriveSeconds, lt::kBevDriveSeed, lt::kBevDriveArgs);
+  ASSERT_FALSE(drive.empty());
+  std::ifstream sj(drive + "/scenario.json");
+  const auto scenario = nlohmann::json::parse(sj);
+  // Killed when the car leaves the first road: the road closes ~0.3 s later (the BEV builder's
+  // close delay) and its BEV_ROAD comes while the lane mapper is down (restart delay 1 s).
+  const double close_s =
+      (scenario["route"][0]["left_utime"].get<int64_t>() - scenario["route"][0]["entered_utime"].get<int64_t>()) * 1e-6;
+  lt::TempDir out("crash-restart-mapper");
+  const GraphRun reference = runGraph(drive, out.str("reference"), 0.0, "lane_mapper");
+  const auto road_files = files(fs::path(reference.store) / "lanes", ".osm");
+  ASSERT_GE(road_files.size(), 1u);
+  const auto origin = lanemap::eval::lanelet2Origin(drive + "/groundtruth.osm");
+  const auto ref_map = lanemap::io::readLanelet2(reference.store + "/lane_map.osm", origin.lat, origin.lon);
+  const GraphRun run = runGraph(drive, out.str("killed"), close_s, "lane_mapper");
+  ASSERT_TRUE(run.killed);
+  EXPECT_EQ(run.watch.bev_pids.size(), 2u) << "restarted by the launcher";
+  ASSERT_TRUE(run.watch.bev_counters.count("roads_caught_up"));
+  EXPECT_EQ(run.watch.bev_counters.at("roads_caught_up"), 1);
+  EXPECT_EQ(files(fs::path(run.store) / "lanes", ".osm"), road_files);
+  const auto map = lanemap::io::readLanelet2(run.store + "/lane_map.osm", origin.lat, origin.lon);
+  const auto same = lanemap::eval::evaluate(ref_map, map);
+  std::printf("lane mapper killed at %.1f s vs uninterrupted: lanes P %.3f R %.3f RMS %.3f m\n", close_s,
+              same.lane_precision.value(), same.lane_recall.value(), same.lane_rms_m);
+  EXPECT_DOUBLE_EQ(same.lane_precision.value(), 1.0);
+  EXPECT_DOUBLE_EQ(same.lane_recall.value(), 1.0);
+  EXPECT_LT(same.lane_rms_m, 0.05);
+}
+
 }  // namespace

@@ -249,7 +249,9 @@ int main(int argc, char** argv) {
     // as it is, named here and in scenario.json ("lanelet2_misread"), rather than failing the drive.
     map::LaneMap truth_written = map::simplified(world->truth(), sim::kTruthSimplifyTolerance);
     // Stop signs, give way and traffic lights at the truth's stop lines, from the OSM nodes.
-    const auto controls = intersections::readControlNodes(osm_path);
+    // (A world from a Lanelet2 map has no OSM control nodes: its roads.osm is derived.)
+    const auto controls = osm_path.empty() ? decltype(intersections::readControlNodes(osm_path)){}
+                                           : intersections::readControlNodes(osm_path);
     intersections::addRegulatoryElements(truth_written, sk, controls);
     const auto misread = io::orientationProblems(truth_written);
     for (const auto& m : misread) std::fprintf(stderr, "lanemap-sim: warning: %s\n", m.c_str());

@@ -36,7 +36,10 @@ map::LaneMap restrictToRoads(const map::LaneMap& truth, const std::set<RoadKey>&
     }
   }
   keep.insert(connectors.begin(), connectors.end());
+  return restrictToLanelets(truth, keep);
+}
 
+map::LaneMap restrictToLanelets(const map::LaneMap& truth, const std::set<int64_t>& keep) {
   map::LaneMap out;
   out.origin_lat = truth.origin_lat;
   out.origin_lon = truth.origin_lon;

@@ -25,6 +25,9 @@ using RoadKey = std::pair<int64_t, int64_t>;
 
 map::LaneMap restrictToRoads(const map::LaneMap& truth, const std::set<RoadKey>& roads);
 map::LaneMap restrictToMappedRoads(const map::LaneMap& truth, const map::LaneMap& built);
+// The lanelets `keep` with their successors among them, their bound and stop lines, and the rules
+// and crosswalks over them (restricted to them; one over none of them is dropped).
+map::LaneMap restrictToLanelets(const map::LaneMap& truth, const std::set<int64_t>& keep);
 
 // The directed roads the map has road lanelets on.
 std::set<RoadKey> mappedRoads(const map::LaneMap& built);

@@ -1151,6 +1151,27 @@ class Builder {
       if (v.junction) addFill(Surface::kIntersection, detail::kLayerIntersection, v.poly);
       else addFill(Surface::kAsphalt, detail::kLayerLane, v.poly, v.ll.id);
     }
+    // Zebra stripes of a crosswalk between its two edges (same direction).
+    auto paintCrosswalk = [&](const std::vector<Vector2d>& left, const std::vector<Vector2d>& right) {
+      // Zebra stripes across the walking direction: 0.5 m of paint every 1 m.
+      const double len = 0.5 * (length(left) + length(right));
+      if (len < 0.6) return;
+      const size_t n = static_cast<size_t>(std::ceil(len / 0.05)) + 1;
+      const auto L = resample(left, n), R = resample(right, n);
+      auto at = [&](const std::vector<Vector2d>& P, double s) {
+        const double f = std::clamp(s / len, 0.0, 1.0) * static_cast<double>(n - 1);
+        const size_t i = std::min(static_cast<size_t>(f), n - 2);
+        return Vector2d(P[i] + (f - static_cast<double>(i)) * (P[i + 1] - P[i]));
+      };
+      for (double s = 0.25; s + 0.5 <= len - 0.1; s += 1.0) {
+        // Inset 0.2 m from the ends of each stripe.
+        Vector2d a0 = at(L, s), b0 = at(R, s), a1 = at(L, s + 0.5), b1 = at(R, s + 0.5);
+        const Vector2d u0 = (b0 - a0).normalized(), u1 = (b1 - a1).normalized();
+        addFill(Surface::kCrosswalkPaint, detail::kLayerCrosswalk,
+                {a0 + 0.2 * u0, a1 + 0.2 * u1, b1 - 0.2 * u1, b0 - 0.2 * u0});
+      }
+      ++stats_.crosswalks;
+    };
     // Other lanelets: bicycle lanes, walkways, crosswalks.
     for (const auto& l : file_.map.lanelets) {
       const auto st = file_.lanelet_subtype.find(l.id);
@@ -1168,25 +1189,15 @@ class Builder {
       } else if (subtype == "walkway") {
         addFill(Surface::kSidewalk, detail::kLayerSidewalk, poly);
       } else if (subtype == "crosswalk") {
-        // Zebra stripes across the walking direction: 0.5 m of paint every 1 m.
-        const double len = 0.5 * (length(left) + length(right));
-        if (len < 0.6) continue;
-        const size_t n = static_cast<size_t>(std::ceil(len / 0.05)) + 1;
-        const auto L = resample(left, n), R = resample(right, n);
-        auto at = [&](const std::vector<Vector2d>& P, double s) {
-          const double f = std::clamp(s / len, 0.0, 1.0) * static_cast<double>(n - 1);
-          const size_t i = std::min(static_cast<size_t>(f), n - 2);
-          return Vector2d(P[i] + (f - static_cast<double>(i)) * (P[i + 1] - P[i]));
-        };
-        for (double s = 0.25; s + 0.5 <= len - 0.1; s += 1.0) {
-          // Inset 0.2 m from the ends of each stripe.
-          Vector2d a0 = at(L, s), b0 = at(R, s), a1 = at(L, s + 0.5), b1 = at(R, s + 0.5);
-          const Vector2d u0 = (b0 - a0).normalized(), u1 = (b1 - a1).normalized();
-          addFill(Surface::kCrosswalkPaint, detail::kLayerCrosswalk,
-                  {a0 + 0.2 * u0, a1 + 0.2 * u1, b1 - 0.2 * u1, b0 - 0.2 * u0});
-        }
-        ++stats_.crosswalks;
+        paintCrosswalk(left, right);
       }
+    }
+    // Crosswalks as the Lanelet2 reader gives them (map.crosswalks: their two edges).
+    for (const auto& c : file_.map.crosswalks) {
+      auto left = xy(c.left), right = xy(c.right);
+      if (left.size() < 2 || right.size() < 2) continue;
+      if (direction(left).dot(direction(right)) < 0) std::reverse(right.begin(), right.end());
+      paintCrosswalk(left, right);
     }
     // Which side of a line the road is on: from a lanelet that uses it as a bound.
     std::map<int64_t, std::pair<int64_t, int>> outward;  // key -> (line id, +1: paint to its left)

@@ -7,7 +7,6 @@
 #include "core/io/lanelet2.h"
 #include "core/mapping/map_assembler.h"
 
-
 #include <algorithm>
 #include <cmath>
 
@@ -15,7 +14,6 @@ namespace lanemap::viewer {
 namespace {
 
 using nlohmann::json;
-
 
 double round6(double v) { return std::round(v * 1e7) / 1e7; }
 

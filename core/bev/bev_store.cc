@@ -5,9 +5,9 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <charconv>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 
 namespace lanemap::bev {
 
@@ -31,6 +31,25 @@ void mergeGrid(const BevGrid& src, BevGrid& dst) {
 
 std::string roadGridPath(const std::string& store, int64_t road_id) {
   return (std::filesystem::path(store) / "bev" / ("road_" + std::to_string(road_id) + ".bev")).string();
+}
+
+std::map<int64_t, std::string> roadFiles(const std::string& dir, const std::string& extension) {
+  std::map<int64_t, std::string> out;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    const std::string prefix = "road_";
+    if (name.size() <= prefix.size() + extension.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+        name.compare(name.size() - extension.size(), extension.size(), extension) != 0) {
+      continue;
+    }
+    const char* first = name.data() + prefix.size();
+    const char* last = name.data() + name.size() - extension.size();
+    int64_t id = 0;
+    const auto [end, err] = std::from_chars(first, last, id);
+    if (err == std::errc() && end == last) out[id] = entry.path().string();
+  }
+  return out;
 }
 
 StoredRoad storeRoad(const std::string& store, const RoadBev& road) {
@@ -79,18 +98,12 @@ void removeCheckpoint(const std::string& store, int64_t road_id) {
 }
 
 std::vector<Checkpoint> loadCheckpoints(const std::string& store, std::vector<std::string>* errors) {
-  std::vector<Checkpoint> out;
-  std::error_code ec;
-  if (!std::filesystem::is_directory(checkpointDir(store), ec)) return out;
-  const std::regex name("road_(-?[0-9]{1,19})\\.bev");
-  for (const auto& entry : std::filesystem::directory_iterator(checkpointDir(store), ec)) {
-    std::smatch m;
-    const std::string fname = entry.path().filename().string();
-    if (!std::regex_match(fname, m, name)) continue;
+  std::vector<Checkpoint> out;  // by road id, as roadFiles gives them
+  for (const auto& [road_id, path] : roadFiles(checkpointDir(store).string(), ".bev")) {
     try {
       Checkpoint c;
-      c.road_id = std::stoll(m[1]);
-      c.path = entry.path().string();
+      c.road_id = road_id;
+      c.path = path;
       c.grid = BevGrid::load(c.path);
       std::ifstream meta(checkpointMeta(store, c.road_id));
       if (meta) {
@@ -99,10 +112,9 @@ std::vector<Checkpoint> loadCheckpoints(const std::string& store, std::vector<st
       }
       out.push_back(std::move(c));
     } catch (const std::exception& e) {
-      if (errors) errors->push_back(entry.path().string() + ": " + e.what());
+      if (errors) errors->push_back(path + ": " + e.what());
     }
   }
-  std::sort(out.begin(), out.end(), [](const Checkpoint& a, const Checkpoint& b) { return a.road_id < b.road_id; });
   return out;
 }
 

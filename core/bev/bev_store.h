@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,9 @@ struct StoredRoad {
 };
 
 std::string roadGridPath(const std::string& store, int64_t road_id);
+// The files road_<id><extension> of a folder of the map store (bev/, bev/open/, lanes/), by road
+// id; none when the folder is missing. Other names are ignored.
+std::map<int64_t, std::string> roadFiles(const std::string& dir, const std::string& extension);
 // Writes (or merges into) the road's file; throws BevError / std::runtime_error on failure.
 StoredRoad storeRoad(const std::string& store, const RoadBev& road);
 

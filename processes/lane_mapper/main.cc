@@ -11,6 +11,7 @@
 //
 //   lanemap-lane-mapper --config config/lane_mapper.yaml [--osm FILE] [--store DIR]
 #include "core/bev/bev_grid.h"
+#include "core/bev/bev_store.h"
 #include "core/intersections/regulatory.h"
 #include "core/io/lanelet2.h"
 #include "core/io/speed_limits.h"
@@ -33,7 +34,6 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <regex>
 #include <string>
 #include <thread>
 
@@ -169,19 +169,15 @@ class LaneMapperApp {
   }
 
   void reloadStore() {
-    const std::regex name("road_(-?[0-9]+)\\.osm");
     const auto& o = sk_->frame().origin();
     io::Lanelet2ReadOptions ro;
     ro.origin_alt = o.alt;
-    for (const auto& entry : fs::directory_iterator(fs::path(store_) / "lanes")) {
-      std::smatch mt;
-      const std::string fname = entry.path().filename().string();
-      if (!std::regex_match(fname, mt, name)) continue;
+    for (const auto& [id, path] : bev::roadFiles((fs::path(store_) / "lanes").string(), ".osm")) {
       try {
-        roads_[std::stoll(mt[1])] = io::readLanelet2(entry.path().string(), o.lat, o.lon, ro);
+        roads_[id] = io::readLanelet2(path, o.lat, o.lon, ro);
         process_.counters().add("roads_loaded");
       } catch (const std::exception& e) {
-        std::cerr << "lane_mapper: skipping " << entry.path() << ": " << e.what() << "\n";
+        std::cerr << "lane_mapper: skipping " << path << ": " << e.what() << "\n";
       }
     }
     for (const auto& [id, m] : roads_) publish(id, m, nowUtime());
@@ -190,18 +186,13 @@ class LaneMapperApp {
   // A road whose BEV grid is in the store but whose lanes are missing or older (its BEV_ROAD came
   // while this process was down, e.g. killed and restarted): mapped now, as if announced.
   void catchUp() {
-    const std::regex name("road_(-?[0-9]{1,19})\\.bev");
     std::error_code ec;
-    for (const auto& entry : fs::directory_iterator(fs::path(store_) / "bev", ec)) {
-      std::smatch mt;
-      const std::string fname = entry.path().filename().string();
-      if (!entry.is_regular_file(ec) || !std::regex_match(fname, mt, name)) continue;
-      const int64_t id = std::stoll(mt[1]);
+    for (const auto& [id, path] : bev::roadFiles((fs::path(store_) / "bev").string(), ".bev")) {
       const std::string lanes = roadFile(id);
-      if (fs::exists(lanes, ec) && fs::last_write_time(lanes, ec) >= fs::last_write_time(entry.path(), ec)) continue;
+      if (fs::exists(lanes, ec) && fs::last_write_time(lanes, ec) >= fs::last_write_time(path, ec)) continue;
       Job job;
       job.road.road_id = id;
-      job.road.path = entry.path().string();
+      job.road.path = path;
       job.road.utime = nowUtime();
       job.recv_utime = nowUtime();
       jobs_.push_back(job);

@@ -16,6 +16,7 @@
 // STATUS latency (per LANE_MAP): from the message's receive time to the map reassembled
 // (roads + intersections, core/mapping) and ready to serve.
 #include "core/bev/bev_grid.h"
+#include "core/bev/bev_store.h"
 #include "core/io/lanelet2.h"
 #include "core/skeleton/skeleton.h"
 #include "core/viewer/http_server.h"
@@ -198,39 +199,29 @@ class LiveFeed {
 void loadStore(const std::string& store, viewer::ViewerState& state) {
   const fs::path lanes = fs::path(store) / "lanes";
   if (!fs::is_directory(lanes)) throw std::runtime_error("no map store at " + store + " (no lanes/ folder)");
-  const std::regex name("road_(-?[0-9]+)\\.osm");
   const auto& o = state.skeleton().frame().origin();
   io::Lanelet2ReadOptions ro;
   ro.origin_alt = o.alt;
   int loaded = 0;
-  for (const auto& entry : fs::directory_iterator(lanes)) {
-    std::smatch mt;
-    const std::string fname = entry.path().filename().string();
-    if (!std::regex_match(fname, mt, name)) continue;
+  for (const auto& [id, path] : bev::roadFiles(lanes.string(), ".osm")) {
     try {
-      const int64_t id = std::stoll(mt[1]);
-      map::LaneMap m = io::readLanelet2(entry.path().string(), o.lat, o.lon, ro);
+      map::LaneMap m = io::readLanelet2(path, o.lat, o.lon, ro);
       for (auto& ll : m.lanelets) ll.road_id = id;
       state.onRoadClosed(id);
       state.setRoadLanes(id, std::move(m));
       ++loaded;
     } catch (const std::exception& e) {
-      std::cerr << "viewer: skipping " << entry.path() << ": " << e.what() << "\n";
+      std::cerr << "viewer: skipping " << path << ": " << e.what() << "\n";
     }
   }
   std::cerr << "viewer: " << loaded << " mapped roads from " << lanes << "\n";
   // The BEV layer: the grid written last (<store>/bev/road_<id>.bev).
-  const std::regex bev_name("road_(-?[0-9]+)\\.bev");
   fs::path newest;
   int64_t newest_id = -1;
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(fs::path(store) / "bev", ec)) {
-    std::smatch mt;
-    const std::string fname = entry.path().filename().string();
-    if (!std::regex_match(fname, mt, bev_name)) continue;
-    if (newest.empty() || fs::last_write_time(entry.path()) > fs::last_write_time(newest)) {
-      newest = entry.path();
-      newest_id = std::stoll(mt[1]);
+  for (const auto& [id, path] : bev::roadFiles((fs::path(store) / "bev").string(), ".bev")) {
+    if (newest.empty() || fs::last_write_time(path) > fs::last_write_time(newest)) {
+      newest = path;
+      newest_id = id;
     }
   }
   if (!newest.empty()) {

@@ -54,6 +54,17 @@ TEST(Checkpoint, StoredLoadedAndRemovedWithTheNewestFrameTime) {
   EXPECT_EQ(loaded.size(), 2u);
   ASSERT_EQ(errors.size(), 1u);
   EXPECT_NE(errors[0].find("road_999.bev"), std::string::npos) << errors[0];
+  // The store's file listing: road_<id>.bev only (not a half-written temporary, not other names).
+  { std::ofstream(store.str("bev/open/road_7.bev.tmp.42")) << "x"; }
+  { std::ofstream(store.str("bev/open/road_x.bev")) << "x"; }
+  { std::ofstream(store.str("bev/open/road_-3.bev")) << "x"; }
+  const auto listed = bev::roadFiles(store.str("bev/open"), ".bev");
+  EXPECT_EQ(listed.size(), 4u);  // a, b, 999, -3
+  EXPECT_TRUE(listed.count(-3));
+  EXPECT_FALSE(listed.count(7));
+  EXPECT_EQ(listed.at(a), bev::checkpointPath(store.str(), a));
+  EXPECT_TRUE(bev::roadFiles(store.str("no-such-folder"), ".bev").empty());
+  std::filesystem::remove(store.str("bev/open/road_-3.bev"));
   bev::removeCheckpoint(store.str(), a);
   bev::removeCheckpoint(store.str(), 999);
   bev::removeCheckpoint(store.str(), 12345);  // none: nothing happens

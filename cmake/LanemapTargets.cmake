@@ -3,10 +3,15 @@
 #   tools/<name>.cc                                    -> build/bin/lanemap-<name>
 #   tests/<module>/<name>_test.cc                      -> one GoogleTest binary each, run by ctest
 
+# Every lanemap-* program is installed into bin/ (`cmake --install`, the Debian package), except
+# the benchmarks (lanemap-bench-*), which read the source tree's data.
 function(lanemap_executable name)
   cmake_parse_arguments(ARG "" "" "SOURCES;LIBS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_LIBS})
+  if(NOT name MATCHES "^lanemap-bench-")
+    install(TARGETS ${name} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  endif()
 endfunction()
 
 # lanemap_main_dirs(<folder> <libs...>): one executable per <folder>/<name>/main.cc (+ its other .cc)

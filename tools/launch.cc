@@ -13,6 +13,8 @@
 // their `hostname:` keys. The launcher exits when none of its processes runs or will restart:
 // 0 if every process ended with status 0, else 1 (and 0 after a SIGINT/SIGTERM stop).
 // The file format is described in docs/recording.md and config/launch/car.yaml.
+#include "processes/framework/share_dir.h"
+
 #include <CLI/CLI.hpp>
 #include <yaml-cpp/yaml.h>
 
@@ -489,6 +491,7 @@ int main(int argc, char** argv) {
       if (eq == std::string::npos || eq == 0) throw std::runtime_error("--set '" + s + "': expected NAME=VALUE");
       overrides[s.substr(0, eq)] = s.substr(eq + 1);
     }
+    file = lanemap::resolveShippedFile(file);  // config/launch/X.yaml from an installation too
     Launch launch = loadLaunch(file, overrides, binDir(), url_flag);
     if (list) {
       std::cout << launch.name << ": lcm_url " << launch.lcm_url << ", workdir " << launch.workdir.string() << "\n";

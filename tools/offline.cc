@@ -47,6 +47,7 @@
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
 #include "processes/framework/process_configs.h"
+#include "processes/framework/share_dir.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -69,13 +70,13 @@ struct Options {
   std::string log, osm, out;
   std::string semantic_channel;  // empty: segment CAMERA_FRONT with the model
   bool oracle = false;
-  std::string segmenter_config = std::string(LANEMAP_SOURCE_DIR) + "/config/segmenter.yaml";
+  std::string segmenter_config = "config/segmenter.yaml";
   std::string model;             // overrides the segmenter config's model.path
   std::string autoware;          // also write Autoware's map folder (lanelet2_map.osm, map_projector_info.yaml) here
-  std::string vehicle = std::string(LANEMAP_SOURCE_DIR) + "/config/vehicle.yaml";
-  std::string bev_config = std::string(LANEMAP_SOURCE_DIR) + "/config/bev_builder.yaml";
-  std::string lanes_config = std::string(LANEMAP_SOURCE_DIR) + "/config/lane_mapper.yaml";
-  std::string tracker_config = std::string(LANEMAP_SOURCE_DIR) + "/config/road_tracker.yaml";
+  std::string vehicle = "config/vehicle.yaml";
+  std::string bev_config = "config/bev_builder.yaml";
+  std::string lanes_config = "config/lane_mapper.yaml";
+  std::string tracker_config = "config/road_tracker.yaml";
   std::string intersections_config;  // "": the lanes config's `intersections:` (as the lane mapper)
   std::string map_config;            // "": the lanes config's `map:` (as the lane mapper)
   bool no_lidar = false, quiet = false;
@@ -270,6 +271,9 @@ int main(int argc, char** argv) {
 
   try {
     const auto t0 = std::chrono::steady_clock::now();
+    for (std::string* f : {&o.segmenter_config, &o.vehicle, &o.bev_config, &o.lanes_config, &o.tracker_config}) {
+      *f = resolveShippedFile(*f);  // a relative name: the current folder, else the shipped configs
+    }
     if (!fs::exists(o.log)) throw std::runtime_error("no such log file: " + o.log);
     const OfflineConfig config = loadConfig(o);
     const osm::OsmData osm_data = osm::readOsm(o.osm);

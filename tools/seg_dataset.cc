@@ -4,6 +4,7 @@
 // (label_image_t class ids) and appends one row per frame to <out>/index.csv:
 //   name,osm,seed,region,t_s,east_m,north_m,light,sun_elevation_deg,pitch_offset_deg
 #include "core/seg/sim_frames.h"
+#include "processes/framework/share_dir.h"
 
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -20,9 +21,9 @@ using namespace lanemap;
 int main(int argc, char** argv) {
   CLI::App app("lanemap-seg-dataset: render simulated camera frames + truth labels for segmentation training");
   seg::SimFrameOptions o;
-  o.vehicle_yaml = std::string(LANEMAP_SOURCE_DIR) + "/config/vehicle.yaml";
-  o.world_yaml = std::string(LANEMAP_SOURCE_DIR) + "/config/sim_world.yaml";
-  o.drive_yaml = std::string(LANEMAP_SOURCE_DIR) + "/config/sim_drive.yaml";
+  o.vehicle_yaml = "config/vehicle.yaml";
+  o.world_yaml = "config/sim_world.yaml";
+  o.drive_yaml = "config/sim_drive.yaml";
   std::string out_dir, region = "all", tag;
   uint64_t first_seed = 1, num_seeds = 1;
   bool plain = false;
@@ -49,6 +50,7 @@ int main(int argc, char** argv) {
   if (tag.empty()) tag = fs::path(o.osm_path).stem().stem().string();
 
   try {
+    for (std::string* f : {&o.vehicle_yaml, &o.world_yaml, &o.drive_yaml}) *f = resolveShippedFile(*f);
     fs::create_directories(fs::path(out_dir) / "images");
     fs::create_directories(fs::path(out_dir) / "labels");
     const fs::path index_path = fs::path(out_dir) / "index.csv";

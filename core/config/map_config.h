@@ -16,7 +16,7 @@
 namespace lanemap::config {
 
 struct MapConfig {
-  std::string osm;  // as written (relative to the working directory); "" when not given
+  std::string osm;  // as written; "" when not given (the processes resolve it: share_dir.h)
   skeleton::SkeletonOptions skeleton;
 
   // Reads the keys above from `r` (strict: r.finish() refuses any other key).

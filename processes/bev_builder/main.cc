@@ -335,7 +335,7 @@ int main(int argc, char** argv) {
     const std::string osm = osm_flag.empty() ? settings.map.osm : osm_flag;
     const std::string store = store_flag.empty() ? settings.store : store_flag;
     const std::string channel = channel_flag.empty() ? settings.semantic_channel : channel_flag;
-    const std::string vehicle = vehicle_flag.empty() ? resolveConfigFile(settings.vehicle) : vehicle_flag;
+    const std::string vehicle = vehicle_flag.empty() ? resolveShippedFile(settings.vehicle) : vehicle_flag;
     if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the map config");
     if (store.empty()) throw std::runtime_error("no map store: give --store or `store:` in the config");
     auto sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(osm::readOsm(osm), settings.map.skeleton));

@@ -2,6 +2,7 @@
 
 #include "lanemap/status_t.hpp"
 #include "processes/framework/channels.h"
+#include "processes/framework/share_dir.h"
 
 #include <unistd.h>
 
@@ -117,6 +118,7 @@ int Process::init(int argc, char** argv) {
   }
   try {
     if (!config_path_.empty()) {
+      config_path_ = resolveShippedFile(config_path_);
       settings_ = config::YamlReader::loadFile(config_path_);
       config_ = settings_.node();
     }

@@ -1,6 +1,7 @@
 #include "processes/framework/process_configs.h"
 
 #include "processes/framework/channels.h"
+#include "processes/framework/share_dir.h"
 
 #include <filesystem>
 
@@ -8,19 +9,13 @@ namespace lanemap {
 
 namespace fs = std::filesystem;
 
-std::string resolveConfigFile(const std::string& path) {
-  if (path.empty() || fs::path(path).is_absolute() || fs::exists(path)) return path;
-  const fs::path in_source = fs::path(LANEMAP_SOURCE_DIR) / path;
-  return fs::exists(in_source) ? in_source.string() : path;
-}
-
 namespace {
 
 // The file a process config names in `key` (default `fallback`).
 std::string namedFile(const config::YamlReader& r, const char* key, const char* fallback) {
   std::string path = r.get<std::string>(key, fallback);
   if (path.empty()) r.fail(key, "must name a file");
-  path = resolveConfigFile(path);
+  path = resolveShippedFile(path);
   if (!fs::exists(path)) r.fail(key, "names '" + path + "', which does not exist");
   return path;
 }
@@ -41,7 +36,9 @@ void positiveQueue(const config::YamlReader& r, const char* key, int& v) {
 }  // namespace
 
 config::MapConfig mapConfigOf(const config::YamlReader& r) {
-  return config::MapConfig::fromYamlFile(namedFile(r, "map", kDefaultMapConfig));
+  config::MapConfig m = config::MapConfig::fromYamlFile(namedFile(r, "map", kDefaultMapConfig));
+  m.osm = resolveShippedFile(m.osm);  // the bundled OSM file from any working directory
+  return m;
 }
 
 intersections::IntersectionOptions intersectionsFromFile(const std::string& path) {
@@ -137,7 +134,7 @@ SegmenterSettings SegmenterSettings::fromYaml(const config::YamlReader& r, const
   r.read("threads", s.threads);
   if (r.has("model") || !model_path.empty()) {
     // With model_path, the name defaults to its stem unless the config names the model.
-    s.model = seg::ModelConfig::fromYaml(r.section("model"), LANEMAP_SOURCE_DIR, model_path);
+    s.model = seg::ModelConfig::fromYaml(r.section("model"), shareDir().string(), model_path);
   }
   return s;
 }

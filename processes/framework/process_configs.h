@@ -6,7 +6,8 @@
 //   map: config/map.yaml                       # OSM file, origin, skeleton (core/config/map_config.h)
 //   intersections: config/intersections.yaml   # lane mapper and viewer (IntersectionOptions)
 // A relative path there is taken from the working directory when it exists there, else from the
-// repository root (so a process started from build/ with the shipped configs finds them).
+// shipped files (processes/framework/share_dir.h: an installation's share/lanemap, or the source
+// tree of a build), so a process started anywhere with the shipped configs finds them.
 // Every reader is strict: an unknown key or a mistyped value is a config::ConfigError naming the
 // file and the key.
 #pragma once
@@ -21,6 +22,7 @@
 #include "core/viewer/http_server.h"
 #include "core/viewer/viewer_state.h"
 #include "processes/framework/channels.h"
+#include "processes/framework/share_dir.h"
 
 #include <optional>
 #include <string>
@@ -30,9 +32,8 @@ namespace lanemap {
 inline constexpr const char* kDefaultMapConfig = "config/map.yaml";
 inline constexpr const char* kDefaultIntersectionsConfig = "config/intersections.yaml";
 
-// `path` as given when it exists or is absolute, else relative to the repository root when it
-// exists there, else as given (the error then names it).
-std::string resolveConfigFile(const std::string& path);
+// Relative file names in configs and flags are resolved with resolveShippedFile: from the current
+// folder, else from the shipped files (processes/framework/share_dir.h).
 
 // The map block a process config names in `map:` (default config/map.yaml), loaded strictly.
 config::MapConfig mapConfigOf(const config::YamlReader& process_config);
@@ -54,7 +55,7 @@ struct RoadTrackerSettings {
 // config/bev_builder.yaml
 struct BevBuilderSettings {
   config::MapConfig map;
-  std::string vehicle = "config/vehicle.yaml";  // resolved with resolveConfigFile
+  std::string vehicle = "config/vehicle.yaml";  // resolved with resolveShippedFile
   std::string store;
   std::string semantic_channel = channels::kSemanticFront;
   int pose_queue = 1000, semantic_queue = 30, lidar_queue = 10, road_event_queue = 100;

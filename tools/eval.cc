@@ -27,6 +27,8 @@
 #include "processes/framework/channels.h"
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
+#include "processes/framework/share_dir.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -47,8 +49,9 @@ std::set<lanemap::eval::RoadKey> drivenRoadsFromLog(const std::string& log_path,
                                                     const std::string& tracker_config) {
   using namespace lanemap;
   if (osm_path.empty()) throw std::runtime_error("--driven with an LCM log needs --osm (the road network it drove)");
-  const auto sk = skeleton::Skeleton::build(osm::readOsm(osm_path));
-  tracking::RoadTracker tracker(sk, tracking::RoadTrackerConfig::fromYaml(loadYamlFile(tracker_config)["tracker"]));
+  const RoadTrackerSettings settings = RoadTrackerSettings::fromYamlFile(tracker_config);  // its map block too
+  const auto sk = skeleton::Skeleton::build(osm::readOsm(osm_path), settings.map.skeleton);
+  tracking::RoadTracker tracker(sk, settings.tracker);
   lcm::LogFile log(log_path, "r");
   if (!log.good()) throw std::runtime_error("cannot read LCM log: " + log_path);
   std::set<eval::RoadKey> out;
@@ -74,7 +77,7 @@ int main(int argc, char** argv) {
   std::string truth_path, map_path, json_path, subtypes_arg = "road,highway,play_street,bus_lane,emergency_lane,exit,";
   lanemap::eval::EvalOptions options;
   std::string driven_path, osm_path;
-  std::string tracker_config = std::string(LANEMAP_SOURCE_DIR) + "/config/road_tracker.yaml";
+  std::string tracker_config = "config/road_tracker.yaml";
   bool no_road_tags = false, quiet = false, mapped_only = false;
   app.add_option("--truth", truth_path, "ground-truth Lanelet2 map (.osm)")->required();
   app.add_option("--map", map_path, "built Lanelet2 map (.osm)")->required();
@@ -115,7 +118,7 @@ int main(int argc, char** argv) {
     if (!driven_path.empty()) {
       const bool json = std::filesystem::path(driven_path).extension() == ".json";
       const auto roads = json ? lanemap::eval::drivenRoadsFromScenario(driven_path)
-                              : drivenRoadsFromLog(driven_path, osm_path, tracker_config);
+                              : drivenRoadsFromLog(driven_path, osm_path, lanemap::resolveShippedFile(tracker_config));
       driven_roads = roads.size();
       truth = lanemap::eval::restrictToRoads(truth, roads);
     }

@@ -10,6 +10,8 @@
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
 #include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
+#include "processes/framework/share_dir.h"
 
 #include <CLI/CLI.hpp>
 
@@ -21,19 +23,21 @@ int main(int argc, char** argv) {
   using namespace lanemap;
   CLI::App app{"Runs lane exploration on one road's saved BEV grid and prints what it finds"};
   std::string bev_path, osm_path, history_path;
-  std::string lanes_config = std::string(LANEMAP_SOURCE_DIR) + "/config/lane_mapper.yaml";
+  std::string lanes_config = "config/lane_mapper.yaml";
   int64_t road_id = -1;
   app.add_option("--bev", bev_path, "a road's BEV grid (lanemap-offline's DIR/bev/road_<id>.bev)")->required();
   app.add_option("--osm", osm_path, "the road-level OSM the map was built on")->required();
   app.add_option("--road", road_id, "atomic road id (the <id> of the file name)")->required();
-  app.add_option("--lanes-config", lanes_config, "lane exploration options (its explorer block)")->capture_default_str();
+  app.add_option("--lanes-config", lanes_config, "the lane mapper config: its explorer block, and its map block's skeleton options")->capture_default_str();
   app.add_option("--history", history_path, "write the surviving particles (s, d) of every 5th step as CSV");
   CLI11_PARSE(app, argc, argv);
   try {
-    const auto sk = skeleton::Skeleton::build(osm::readOsm(osm_path));
+    lanes_config = resolveShippedFile(lanes_config);
+    const LaneMapperSettings settings = LaneMapperSettings::fromYamlFile(lanes_config);  // map + explorer blocks
+    const auto sk = skeleton::Skeleton::build(osm::readOsm(osm_path), settings.map.skeleton);
     const auto* road = sk.road(road_id);
     if (!road) throw std::runtime_error("no atomic road " + std::to_string(road_id) + " in " + osm_path);
-    const auto options = lanes::ExplorerOptions::fromYaml(loadYamlFile(lanes_config)["explorer"]);
+    const lanes::ExplorerOptions& options = settings.explorer;
     const auto geometry = lanes::RoadGeometry::fromSkeleton(*road);
     const auto grid = bev::BevGrid::load(bev_path);
     const auto res = lanes::exploreRoad(grid, geometry, options, std::nullopt, history_path.empty() ? 0 : 5);

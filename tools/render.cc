@@ -3,8 +3,11 @@
 //   lanemap-render --bev map-store/bev/road_12.bev [--osm roads.osm] --png out.png [--scale 2]
 #include "core/bev/bev_grid.h"
 #include "core/bev/bev_render.h"
+#include "core/config/map_config.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
+#include "processes/framework/process_configs.h"
+#include "processes/framework/share_dir.h"
 
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -21,6 +24,8 @@ int main(int argc, char** argv) {
   app.add_option("--bev", bev_path, "BEV grid file (BevGrid::save)")->required()->check(CLI::ExistingFile);
   app.add_option("--osm", osm_path, "OSM file whose skeleton is drawn over it (same ENU origin as the grid)")
       ->check(CLI::ExistingFile);
+  std::string map_config = lanemap::kDefaultMapConfig;
+  app.add_option("--map-config", map_config, "map block whose skeleton options build the roads drawn")->capture_default_str();
   app.add_option("--png", png_path, "output PNG")->required();
   app.add_option("--scale", options.scale, "pixels per cell side")->check(CLI::Range(1, 16));
   app.add_option("--min-fraction", options.min_fraction, "a layer shows where its share of observations reaches this");
@@ -29,7 +34,8 @@ int main(int argc, char** argv) {
     const bev::BevGrid grid = bev::BevGrid::load(bev_path);
     std::vector<std::vector<Eigen::Vector2d>> lines;
     if (!osm_path.empty()) {
-      const auto sk = skeleton::Skeleton::build(osm::readOsm(osm_path));
+      const auto map = config::MapConfig::fromYamlFile(lanemap::resolveShippedFile(map_config));
+      const auto sk = skeleton::Skeleton::build(osm::readOsm(osm_path), map.skeleton);
       for (const auto& r : sk.roads()) lines.push_back(r.polyline);
       for (const auto& i : sk.intersections()) {
         if (i.roi.size() < 3) continue;

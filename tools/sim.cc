@@ -8,6 +8,7 @@
 //   <out>/scenario.json     route, seed, options, counts
 // Everything is checked (OSM, route) before anything is written; output goes to a temporary
 // folder renamed into place at the end, so a failed run leaves nothing behind.
+#include "core/config/map_config.h"
 #include "core/intersections/regulatory.h"
 #include "core/io/lanelet2.h"
 #include "core/io/speed_limits.h"
@@ -27,6 +28,8 @@
 #include "processes/framework/channels.h"
 #include "processes/framework/lcm_log_writer.h"
 #include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
+#include "processes/framework/share_dir.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -138,9 +141,10 @@ int main(int argc, char** argv) {
       "junctions, the ground truth its vehicle lanelets, and roads.osm a road-level OSM derived from\n"
       "the lanelets (ways along groups of side-by-side lanelets, junction nodes where they branch).");
   std::string osm_path, lanelet2_path, origin_text, out_dir, route_text = "auto";
-  std::string vehicle_path = std::string(LANEMAP_SOURCE_DIR) + "/config/vehicle.yaml";
-  std::string world_path = std::string(LANEMAP_SOURCE_DIR) + "/config/sim_world.yaml";
-  std::string drive_path = std::string(LANEMAP_SOURCE_DIR) + "/config/sim_drive.yaml";
+  std::string vehicle_path = "config/vehicle.yaml";
+  std::string world_path = "config/sim_world.yaml";
+  std::string drive_path = "config/sim_drive.yaml";
+  std::string map_path = kDefaultMapConfig;
   uint64_t seed = 1;
   double duration = 120.0, camera_hz = 10.0, pose_hz = 100.0;
   bool no_lidar = false, flat = false, keep_lane_tags = false, force = false, quiet = false;
@@ -163,6 +167,9 @@ int main(int argc, char** argv) {
   app.add_option("--vehicle", vehicle_path, "camera and LIDAR config");
   app.add_option("--world-config", world_path, "world generation config");
   app.add_option("--drive-config", drive_path, "driving style and pose noise config");
+  app.add_option("--map-config", map_path,
+                 "the map block whose skeleton options cut the atomic roads (the mapper's, so that "
+                 "scenario.json's road ids are the map's)")->capture_default_str();
   app.add_flag("--force", force, "replace a non-empty --out");
   app.add_flag("-q,--quiet", quiet, "no progress");
   CLI11_PARSE(app, argc, argv);
@@ -180,6 +187,8 @@ int main(int argc, char** argv) {
   fs::path out(out_dir);
   fs::path tmp;
   try {
+    // Relative names: the current folder, else the shipped files (configs, data/osm/...).
+    for (std::string* f : {&vehicle_path, &world_path, &drive_path, &osm_path, &lanelet2_path, &map_path}) *f = resolveShippedFile(*f);
     if (fs::exists(out) && !fs::is_directory(out)) throw std::runtime_error("--out '" + out_dir + "' is a file");
     if (fs::exists(out) && !fs::is_empty(out) && !force) {
       throw std::runtime_error("--out '" + out_dir + "' is not empty (use --force to replace it)");
@@ -218,7 +227,8 @@ int main(int argc, char** argv) {
       l2_stats = l2.stats;
     } else {
       osm_data = osm::readOsm(osm_path);
-      sk_ptr = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(osm_data));
+      const auto map = config::MapConfig::fromYamlFile(map_path);
+      sk_ptr = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(osm_data, map.skeleton));
       world = sim::buildWorld(*sk_ptr, world_options);
     }
     const skeleton::Skeleton& sk = *sk_ptr;

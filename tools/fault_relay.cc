@@ -16,6 +16,7 @@
 // reorder_expired (held back but nothing came to overtake it within --hold-ms), delayed, and per channel received:<CH>, dropped:<CH>, duplicated:<CH>, reordered:<CH>.
 // STATUS messages seen on --from are not relayed unless --relay-status (they would mix with the
 // relay's own). Exits 0 on SIGINT/SIGTERM, or after --max-seconds.
+#include "processes/framework/channels.h"
 #include "processes/framework/process.h"
 
 #include <lcm/lcm-cpp.hpp>
@@ -141,7 +142,7 @@ class Relay {
   }
 
   void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    if (channel == "STATUS" && !relay_status_) return;
+    if (channel == lanemap::channels::kStatus && !relay_status_) return;
     Channel& ch = channelState(channel);
     auto& c = process_.counters();
     c.add("received");

@@ -6,6 +6,7 @@
 //
 //   lanemap-graph-report --log STORE/graph.lcmlog [--drive-log DRIVE/drive.lcmlog] [--fail-on-drop]
 // Exit status: 0; 1 with --fail-on-drop when a frame was dropped or lost; 2 on an error.
+#include "processes/framework/channels.h"
 #include "processes/framework/graph_report.h"
 
 #include <CLI/CLI.hpp>
@@ -14,7 +15,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"Drops, latency, CPU and map completion of a live graph run, from its recording"};
-  std::string log, drive_log, labels = "SEMANTIC_FRONT";
+  std::string log, drive_log, labels = lanemap::channels::kSemanticFront;
   bool fail_on_drop = false;
   app.add_option("--log", log, "the recording: STATUS, LANE_MAP, BEV_ROAD, ROAD_EVENT, POSE (demo.yaml's graph.lcmlog)")->required();
   app.add_option("--drive-log", drive_log, "the drive log that was played (to check every message arrived)");

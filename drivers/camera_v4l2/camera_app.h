@@ -6,6 +6,7 @@
 
 #include "core/camera/v4l2_capture.h"
 #include "core/camera/v4l2_device.h"
+#include "processes/framework/channels.h"
 #include "processes/framework/process.h"
 
 #include <atomic>
@@ -16,7 +17,7 @@ namespace lanemap::drivers {
 
 struct CameraSettings {
   std::string device = "/dev/video0";
-  std::string channel = "CAMERA_FRONT";
+  std::string channel = channels::kCameraFront;
   camera::CaptureSettings capture;
 
   // Reads the keys present in `config` (unknown keys are an error naming them). Throws

@@ -6,6 +6,7 @@
 
 #include "drivers/lidar_vlp16/packet_source.h"
 #include "drivers/lidar_vlp16/sweep_bundler.h"
+#include "processes/framework/channels.h"
 #include "processes/framework/process.h"
 
 #include <atomic>
@@ -24,8 +25,8 @@ struct LidarSettings {
   int position_port = 8308;  // 0: do not listen for position packets
   int receive_buffer_bytes = 8 << 20;
   bool publish_points = false;
-  std::string packets_channel = "LIDAR_PACKETS";
-  std::string points_channel = "LIDAR_POINTS";
+  std::string packets_channel = channels::kLidarPackets;
+  std::string points_channel = channels::kLidarPoints;
   // Replay (--pcap): file, rate scale (0 = as fast as possible), keep the capture timestamps.
   std::string pcap;
   double rate_scale = 1.0;

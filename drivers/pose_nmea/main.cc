@@ -3,10 +3,7 @@
 // publishes one POSE (pose_t) per fix epoch; rejected lines are counted by reason in STATUS.
 #include "drivers/pose_nmea/pose_app.h"
 #include "processes/framework/process.h"
-
-#include <signal.h>
-
-#include <pthread.h>
+#include "processes/framework/stop_signals.h"
 
 #include <iostream>
 #include <optional>
@@ -46,11 +43,7 @@ int main(int argc, char** argv) {
     settings.realtime = settings.realtime || realtime;
     settings.validate();
     // SIGINT/SIGTERM are taken by the reader thread (it unblocks them), not by spin()'s LCM wait.
-    sigset_t stop_signals;
-    sigemptyset(&stop_signals);
-    sigaddset(&stop_signals, SIGINT);
-    sigaddset(&stop_signals, SIGTERM);
-    pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+    lanemap::setStopSignalsBlocked(true);
     lanemap::drivers::PoseApp pose(process, settings);
     const int rc = process.spin();
     return process.counters().get("source_errors") > 0 ? 1 : rc;  // e.g. the device was unplugged

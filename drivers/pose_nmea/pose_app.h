@@ -6,6 +6,7 @@
 
 #include "core/gnss/nmea.h"
 #include "drivers/pose_nmea/nmea_source.h"
+#include "processes/framework/channels.h"
 #include "processes/framework/process.h"
 
 #include <atomic>
@@ -25,7 +26,7 @@ struct PoseSettings {
   int udp_port = 10110;  // the usual NMEA-over-UDP port
   std::string file;
   bool realtime = false;  // file: pace the epochs by their NMEA time
-  std::string channel = "POSE";
+  std::string channel = channels::kPose;
   std::vector<std::string> talkers;  // empty: NmeaParser's default set
   gnss::CombinerOptions combiner;
 

@@ -25,6 +25,7 @@
 #pragma once
 
 #include "lanemap/status_t.hpp"
+#include "processes/framework/channels.h"
 
 #include <cmath>
 #include <cstdint>
@@ -67,7 +68,7 @@ struct GraphReport {
   // Messages per channel of the drive log that was played ({} when not given).
   std::map<std::string, int64_t> published;
   // The channel the bev_builder projects (its semantic channel).
-  std::string labels_channel = "SEMANTIC_FRONT";
+  std::string labels_channel = channels::kSemanticFront;
 
   const ProcessHealth* process(const std::string& name) const;
   double driveSeconds() const { return (drive_end_utime - drive_start_utime) * 1e-6; }
@@ -84,7 +85,7 @@ std::map<std::string, int64_t> countLogChannels(const std::string& path);
 
 // Reads the recording; `drive_log` (may be empty) is the log that was played.
 GraphReport readGraphReport(const std::string& graph_log, const std::string& drive_log = "",
-                            const std::string& labels_channel = "SEMANTIC_FRONT");
+                            const std::string& labels_channel = channels::kSemanticFront);
 
 void printGraphReport(const GraphReport& report, std::ostream& out);
 

@@ -1,0 +1,160 @@
+#include "core/bev/bev_align.h"
+
+#include "core/bev/bev_store.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace lanemap::bev {
+
+namespace {
+
+// The share of a cell's observations that saw a line of any kind, over the cells of `box`
+// (row = north index - box.min().y()); *observed (optional): 1 where the cell was observed.
+cv::Mat lineImage(const BevGrid& g, const Eigen::AlignedBox2i& box, cv::Mat* observed) {
+  const int w = box.sizes().x(), h = box.sizes().y();
+  cv::Mat img(h, w, CV_32F, cv::Scalar(0));
+  if (observed) *observed = cv::Mat(h, w, CV_8U, cv::Scalar(0));
+  const int t = g.options().tile_cells;
+  const size_t plane = static_cast<size_t>(t) * t;
+  g.forEachTile([&](const BevGrid::Cell& origin, const uint16_t* counts) {
+    for (int r = 0; r < t; ++r) {
+      const int y = origin.y() + r - box.min().y();
+      if (y < 0 || y >= h) continue;
+      for (int c = 0; c < t; ++c) {
+        const int x = origin.x() + c - box.min().x();
+        if (x < 0 || x >= w) continue;
+        const size_t i = static_cast<size_t>(r) * t + c;
+        const double n = counts[static_cast<size_t>(Layer::kObserved) * plane + i];
+        if (n <= 0) continue;
+        double lines = 0;
+        for (Layer l : {Layer::kLaneSeparation, Layer::kDashedLine, Layer::kSolidLine, Layer::kCurb, Layer::kStopLine}) {
+          lines += counts[static_cast<size_t>(l) * plane + i];
+        }
+        img.at<float>(y, x) = static_cast<float>(std::min(1.0, lines / n));
+        if (observed) observed->at<uint8_t>(y, x) = 1;
+      }
+    }
+  });
+  return img;
+}
+
+Eigen::AlignedBox2i grown(const Eigen::AlignedBox2i& b, int by) {
+  return Eigen::AlignedBox2i(b.min() - Eigen::Vector2i(by, by), b.max() + Eigen::Vector2i(by, by));
+}
+
+}  // namespace
+
+Alignment estimateShift(const BevGrid& reference, const BevGrid& traversal, const AlignOptions& o) {
+  if (reference.resolution() != traversal.resolution() ||
+      reference.options().tile_cells != traversal.options().tile_cells) {
+    throw BevError("cannot align BEV grids of different resolution or tile size");
+  }
+  Alignment a;
+  const double res = reference.resolution();
+  const int radius = std::max(1, static_cast<int>(std::lround(o.search_m / res)));
+  const Eigen::AlignedBox2i box = reference.cellBounds().intersection(traversal.cellBounds());
+  if (box.isEmpty() || box.sizes().minCoeff() <= 2 * radius) {
+    a.why = "the grids do not overlap";
+    return a;
+  }
+  cv::Mat seen_t, seen_r;
+  cv::Mat templ = lineImage(traversal, box, &seen_t);
+  cv::Mat search = lineImage(reference, grown(box, radius), &seen_r);
+  cv::Mat both;
+  cv::bitwise_and(seen_t, seen_r(cv::Rect(radius, radius, templ.cols, templ.rows)), both);
+  a.overlap_cells = cv::countNonZero(both);
+  if (a.overlap_cells < o.min_overlap_cells) {
+    a.why = "overlap of " + std::to_string(a.overlap_cells) + " cells, fewer than " + std::to_string(o.min_overlap_cells);
+    return a;
+  }
+  // Zero-mean over the observed cells and 0 elsewhere: where a grid's observed area ends (the
+  // road corridor's edge, fixed in the map frame whatever the pose error) is no feature.
+  for (auto [img, seen] : {std::pair<cv::Mat*, cv::Mat*>{&templ, &seen_t}, {&search, &seen_r}}) {
+    const double mean = cv::mean(*img, *seen)[0];
+    cv::subtract(*img, cv::Scalar(mean), *img, *seen);
+  }
+  if (o.smooth_sigma_m > 0) {
+    const double sigma = o.smooth_sigma_m / res;
+    cv::GaussianBlur(templ, templ, cv::Size(), sigma);
+    cv::GaussianBlur(search, search, cv::Size(), sigma);
+  }
+  cv::Mat score;
+  cv::matchTemplate(search, templ, score, cv::TM_CCORR_NORMED);  // (2 radius + 1)^2
+  for (int y = 0; y < score.rows; ++y) {
+    for (int x = 0; x < score.cols; ++x) {
+      const double dx = (x - radius) * res, dy = (y - radius) * res;
+      score.at<float>(y, x) -= static_cast<float>(o.shift_prior * (dx * dx + dy * dy));
+    }
+  }
+  double best = 0;
+  cv::Point at;
+  cv::minMaxLoc(score, nullptr, &best, nullptr, &at);
+  a.correlation = best;
+  a.shift_cells = Eigen::Vector2i(at.x - radius, at.y - radius);
+  a.shift_m = a.shift_cells.cast<double>() * res;
+  // How clear the peak is: the best score at least 0.5 m away from it.
+  const int away = std::max(1, static_cast<int>(std::lround(0.5 / res)));
+  double second = -1;
+  for (int y = 0; y < score.rows; ++y) {
+    for (int x = 0; x < score.cols; ++x) {
+      if (std::max(std::abs(x - at.x), std::abs(y - at.y)) >= away) second = std::max(second, static_cast<double>(score.at<float>(y, x)));
+    }
+  }
+  a.margin = best - second;
+  if (!(best >= o.min_correlation)) {
+    a.why = "line correlation " + std::to_string(best) + " below " + std::to_string(o.min_correlation);
+    return a;
+  }
+  if (a.margin < o.min_peak_margin) {
+    a.why = "no clear peak (margin " + std::to_string(a.margin) + ")";
+    return a;
+  }
+  a.ok = true;
+  return a;
+}
+
+BevGrid shiftedGrid(const BevGrid& grid, const Eigen::Vector2i& shift) {
+  BevGrid out(grid.options());
+  const int t = grid.options().tile_cells;
+  const size_t plane = static_cast<size_t>(t) * t;
+  grid.forEachTile([&](const BevGrid::Cell& origin, const uint16_t* counts) {
+    for (int l = 0; l < kNumLayers; ++l) {
+      for (int r = 0; r < t; ++r) {
+        for (int c = 0; c < t; ++c) {
+          const uint16_t n = counts[static_cast<size_t>(l) * plane + static_cast<size_t>(r) * t + c];
+          if (n) out.add(BevGrid::Cell(origin.x() + c + shift.x(), origin.y() + r + shift.y()), static_cast<Layer>(l), n);
+        }
+      }
+    }
+  });
+  for (int i = 0; i < grid.frames(); ++i) out.addFrame();
+  return out;
+}
+
+Alignment mergeAligned(const BevGrid& traversal, BevGrid& fused, int traversals_fused, bool align, const AlignOptions& o) {
+  Alignment a;
+  if (traversals_fused <= 0 || fused.tileCount() == 0) {
+    mergeGrid(traversal, fused);
+    a.why = "the first traversal";
+    return a;
+  }
+  if (align) a = estimateShift(fused, traversal, o);
+  if (!align) a.why = "alignment off";
+  if (!a.ok) {
+    mergeGrid(traversal, fused);
+    return a;
+  }
+  // Both onto the mean of all traversals: fused by -s/(k+1), the new one by s - s/(k+1).
+  const double k1 = traversals_fused + 1.0;
+  const Eigen::Vector2i fused_move(static_cast<int>(std::lround(-a.shift_cells.x() / k1)),
+                                   static_cast<int>(std::lround(-a.shift_cells.y() / k1)));
+  const Eigen::Vector2i traversal_move = a.shift_cells + fused_move;
+  if (fused_move != Eigen::Vector2i::Zero()) fused = shiftedGrid(fused, fused_move);
+  mergeGrid(traversal_move == Eigen::Vector2i::Zero() ? traversal : shiftedGrid(traversal, traversal_move), fused);
+  return a;
+}
+
+}  // namespace lanemap::bev

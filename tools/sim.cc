@@ -146,6 +146,7 @@ int main(int argc, char** argv) {
   std::string drive_path = "config/sim_drive.yaml";
   std::string map_path = kDefaultMapConfig;
   uint64_t seed = 1;
+  std::optional<uint64_t> world_seed;
   double duration = 120.0, camera_hz = 10.0, pose_hz = 100.0;
   bool no_lidar = false, flat = false, keep_lane_tags = false, force = false, quiet = false;
   auto* osm_opt = app.add_option("--osm", osm_path, "road network (.osm or .osm.pbf)");
@@ -157,7 +158,11 @@ int main(int argc, char** argv) {
   l2_opt->excludes(osm_opt);
   app.add_option("--out", out_dir, "output folder (must not exist or be empty, unless --force)")->required();
   app.add_option("--route", route_text, "auto, or intersection node ids to pass through: id,id,...");
-  app.add_option("--seed", seed, "random seed: world irregularities, route, noise");
+  app.add_option("--seed", seed, "random seed: the route, speeds, pose noise and light (and the world, without --world-seed)");
+  app.add_option("--world-seed", world_seed,
+                 "the world's own seed (lane widths, parked cars, paint wear, ...): drives of one campaign share it and "
+                 "write the same groundtruth.osm; each such drive also gets its own constant pose offset "
+                 "(sim_drive.yaml pose_noise campaign_offset_sigma_m, campaign_heading_sigma_deg)");
   app.add_option("--duration", duration, "longest drive, seconds")->check(CLI::PositiveNumber);
   app.add_option("--camera-hz", camera_hz, "camera frame rate")->check(CLI::Range(0.1, 60.0));
   app.add_option("--pose-hz", pose_hz, "pose rate")->check(CLI::Range(0.1, 1000.0));
@@ -199,7 +204,7 @@ int main(int argc, char** argv) {
     std::optional<sim::LidarScannerOptions> lidar;
     if (!no_lidar) lidar = sim::LidarScannerOptions::fromYaml(vehicle["lidar"]);
     sim::WorldOptions world_options = sim::WorldOptions::fromYaml(loadYamlFile(world_path));
-    world_options.seed = seed;
+    world_options.seed = world_seed ? *world_seed : seed;
     if (flat) world_options.flat = true;
 
     osm::OsmData osm_data;
@@ -292,6 +297,11 @@ int main(int argc, char** argv) {
     sim_options.lidar = !no_lidar;
     if (vehicle["camera"]["jpeg_quality"]) sim_options.jpeg_quality = vehicle["camera"]["jpeg_quality"].as<int>();
     sim_options.pose_noise = sim::PoseNoiseOptions::fromYaml(drive_config["pose_noise"]);
+    if (!world_seed) {  // a drive on its own defines its frame: no drive offset
+      sim_options.pose_noise.drive_offset_sigma_m = 0.0;
+      sim_options.pose_noise.drive_heading_sigma_deg = 0.0;
+    }
+    const sim::DriveOffset drive_offset = sim::driveOffset(sim_options.pose_noise, seed);
     sim::RenderOptions render;
     // Lines between the two directions of a road are painted yellow (US style).
     render.opposite_directions = [w = world.get()](int64_t a, int64_t b) {
@@ -351,6 +361,9 @@ int main(int argc, char** argv) {
                                     {"crosswalks", st.crosswalks}, {"stop_lines", st.stop_lines}};
     }
     scenario["seed"] = seed;
+    scenario["world_seed"] = world_options.seed;
+    scenario["pose_offset"] = {{"east_m", drive_offset.position.x()}, {"north_m", drive_offset.position.y()},
+                               {"heading_deg", drive_offset.yaw_rad * 180.0 / M_PI}};
     scenario["start_utime"] = sim_options.start_utime;
     scenario["duration_s"] = trajectory.duration();
     scenario["length_m"] = trajectory.length();

@@ -812,7 +812,13 @@ void writeLanelet2(const LaneMap& map, const std::string& path, const Lanelet2Wr
   const std::string next = sidecar.substr(0, sidecar.size() - std::string(".lanemap.json").size()) + ".next.lanemap.json";
   if (options.write_sidecar) {
     writeFileAtomically(next, doc.sidecar);
-    writeFileAtomically(path, doc.osm);
+    try {
+      writeFileAtomically(path, doc.osm);
+    } catch (const IoError&) {  // e.g. a full disk: the old map and its sidecar stay, nothing else
+      std::error_code ec;
+      std::filesystem::remove(next, ec);
+      throw;
+    }
     renameFileDurably(next, sidecar);
   } else {
     removeFileDurably(next);  // no stale sidecar of an earlier version of the map

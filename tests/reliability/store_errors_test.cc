@@ -12,6 +12,7 @@
 #include "core/io/lanelet2.h"
 #include "core/io/store_lock.h"
 #include "core/map/lane_map.h"
+#include "tests/bev/bev_replay.h"
 #include "tests/common/child_process.h"
 #include "tests/common/sim_drive.h"
 
@@ -235,6 +236,15 @@ TEST(StoreErrors, AFullDiskFailsTheWriteAndLeavesTheOldFiles) {
   const auto r = lt::runCommand(processCommand("bev-builder", store));
   EXPECT_EQ(r.exit_code, io::kExitStoreError) << r.output;
   EXPECT_NE(r.output.find("No space left on device"), std::string::npos) << r.output;
+  // lanemap-offline writing its map there: exit 2 with the reason, no map, no temporary.
+  const std::string drive = lt::sharedSimDrive("osm/west-oakland.osm", lt::kBevDriveSeconds, lt::kBevDriveSeed, lt::kBevDriveArgs);
+  ASSERT_FALSE(drive.empty());
+  const auto off = lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --log " + drive + "/drive.lcmlog --osm " + drive +
+                                  "/roads.osm --out " + store + "/offline");
+  EXPECT_EQ(off.exit_code, 2) << off.output;
+  EXPECT_NE(off.output.find("No space left on device"), std::string::npos) << off.output;
+  EXPECT_FALSE(fs::exists(store + "/offline/map.osm"));
+  fs::remove_all(store + "/offline");
   fs::remove(store + "/filler");
   expectStoreUnchanged(store);
 }

@@ -46,6 +46,7 @@
 #include "processes/framework/channels.h"
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
+#include "processes/framework/log_reader.h"
 #include "processes/framework/process_configs.h"
 #include "processes/framework/share_dir.h"
 
@@ -100,9 +101,13 @@ OfflineConfig loadConfig(const Options& o) {
   return c;
 }
 
+int64_t g_undecodable = 0;  // messages of a mapped channel that do not decode (a corrupt log)
+
 template <typename T>
 bool decode(const lcm::LogEvent& ev, T& msg) {
-  return msg.decode(ev.data, 0, static_cast<int>(ev.datalen)) >= 0;
+  if (msg.decode(ev.data, 0, static_cast<int>(ev.datalen)) >= 0) return true;
+  ++g_undecodable;
+  return false;
 }
 
 class OfflineMapper {
@@ -278,8 +283,7 @@ int main(int argc, char** argv) {
     const OfflineConfig config = loadConfig(o);
     const osm::OsmData osm_data = osm::readOsm(o.osm);
     const auto sk = skeleton::Skeleton::build(osm_data, config.lanes.map.skeleton);
-    lcm::LogFile log(o.log, "r");
-    if (!log.good()) throw std::runtime_error("cannot read LCM log: " + o.log);
+    LogReader log(o.log);  // a damaged log: what is readable is mapped, and said (summary.json "log")
     if (o.oracle) o.semantic_channel = channels::kSemanticFrontTruth;
     std::unique_ptr<seg::Segmenter> model;
     if (o.semantic_channel.empty()) model = loadModel(o);
@@ -288,11 +292,16 @@ int main(int argc, char** argv) {
     OfflineMapper mapper(o, config, sk, osm_data.restrictions, std::move(model));
     const auto log_size = std::max<uintmax_t>(1, fs::file_size(o.log));
     int64_t events = 0;
-    while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    while (const lcm::LogEvent* ev = log.next()) {
       mapper.onEvent(*ev);
       if (!o.quiet && ++events % 2000 == 0) {
-        std::fprintf(stderr, "\rlanemap-offline: %3.0f %% of the log", 100.0 * std::ftell(log.getFilePtr()) / log_size);
+        std::fprintf(stderr, "\rlanemap-offline: %3.0f %% of the log", 100.0 * log.position() / log_size);
       }
+    }
+    if (log.events() == 0) throw std::runtime_error("not an LCM log, or no whole event in it: " + o.log + " (" + log.damageReport() + ")");
+    if (log.damaged() || g_undecodable > 0) {
+      std::fprintf(stderr, "lanemap-offline: warning: the log is damaged, mapping what could be read: %s; %lld messages did not decode\n",
+                   log.damageReport().c_str(), static_cast<long long>(g_undecodable));
     }
     mapper.finish();
     std::vector<std::string> junction_failures;
@@ -313,7 +322,10 @@ int main(int argc, char** argv) {
                               {"regulatory_elements", map.regulatory_elements.size()},
                               {"crosswalks", map.crosswalks.size()},
                               {"frames_mesh", s.frames_mesh}, {"frames_segmented", mapper.framesSegmented()},
-                              {"frames_failed", mapper.framesFailed()}, {"seconds", secs}};
+                              {"frames_failed", mapper.framesFailed()}, {"seconds", secs},
+                              {"log_read", {{"events", log.events()}, {"bytes", log.fileSize()},
+                                            {"bytes_skipped", log.bytesSkipped()}, {"bytes_unread", log.bytesUnread()},
+                                            {"messages_undecodable", g_undecodable}, {"damaged", log.damaged() || g_undecodable > 0}}}};
     io::writeFileAtomically((fs::path(o.out) / "summary.json").string(), summary.dump(2) + "\n");
     if (map.lanelets.empty()) {
       throw std::runtime_error(mapper.roadsFailed() > 0 ? "no road was mapped: every road explored failed (see summary.json)"

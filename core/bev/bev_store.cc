@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -55,7 +56,7 @@ std::map<int64_t, std::string> roadFiles(const std::string& dir, const std::stri
 StoredRoad storeRoad(const std::string& store, const RoadBev& road) {
   StoredRoad s;
   s.path = roadGridPath(store, road.road_id);
-  std::filesystem::create_directories(std::filesystem::path(s.path).parent_path());
+  io::createDirectories(std::filesystem::path(s.path).parent_path().string());
   BevGrid grid = road.grid;
   if (std::filesystem::exists(s.path)) {
     const BevGrid old = BevGrid::load(s.path);
@@ -78,28 +79,85 @@ std::filesystem::path checkpointDir(const std::string& store) { return std::file
 std::filesystem::path checkpointMeta(const std::string& store, int64_t road_id) {
   return checkpointDir(store) / ("road_" + std::to_string(road_id) + ".json");
 }
+
+// The frame count in the header of a stored grid file (BevGrid::save: magic, resolution, tile
+// size, layers, frames): 0 when there is none, -1 when it cannot be read.
+int64_t storedFrames(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return 0;
+  std::ifstream f(path, std::ios::binary);
+  char header[28];
+  if (!f.read(header, sizeof(header)) || std::memcmp(header, "LMBEV001", 8) != 0) return -1;
+  int32_t frames = 0;
+  std::memcpy(&frames, header + 24, sizeof(frames));
+  return frames;
+}
+
 }  // namespace
+
+uint64_t gridHash(const BevGrid& grid) {
+  constexpr uint64_t kPrime = 1099511628211ull;
+  const size_t n = static_cast<size_t>(kNumLayers) * grid.options().tile_cells * grid.options().tile_cells;
+  uint64_t sum = 0;  // per-tile hashes summed: the tiles' order does not matter
+  grid.forEachTile([&](const BevGrid::Cell& origin, const uint16_t* counts) {
+    uint64_t h = 14695981039346656037ull ^ ((static_cast<uint64_t>(static_cast<uint32_t>(origin.x())) << 32) |
+                                           static_cast<uint32_t>(origin.y()));
+    h *= kPrime;
+    size_t i = 0;
+    for (; i + 4 <= n; i += 4) {
+      uint64_t w;
+      std::memcpy(&w, counts + i, sizeof(w));
+      h = (h ^ w) * kPrime;
+    }
+    for (; i < n; ++i) h = (h ^ counts[i]) * kPrime;
+    sum += h ^ (h >> 29);
+  });
+  uint64_t r;
+  const double res = grid.resolution();
+  std::memcpy(&r, &res, sizeof(r));
+  return ((sum ^ r) * kPrime ^ static_cast<uint64_t>(grid.frames())) * kPrime ^ grid.tileCount();
+}
 
 std::string checkpointPath(const std::string& store, int64_t road_id) {
   return (checkpointDir(store) / ("road_" + std::to_string(road_id) + ".bev")).string();
 }
 
+// The checkpoint is two files, the grid and then its JSON. The JSON names the grid it belongs to
+// (its hash) and how many frames the road's stored grid had when it was written: a checkpoint
+// found after a crash whose road's stored grid has more frames since was stored already (the
+// crash came between storeRoad and removeCheckpoint) and is not carried on again, which would
+// count its frames twice.
 void storeCheckpoint(const std::string& store, const RoadBev& road, int64_t last_frame_utime) {
-  std::filesystem::create_directories(checkpointDir(store));
+  io::createDirectories(checkpointDir(store).string());
+  const int64_t stored = storedFrames(roadGridPath(store, road.road_id));
   road.grid.save(checkpointPath(store, road.road_id));
-  const nlohmann::json meta{{"road_id", road.road_id}, {"last_frame_utime", last_frame_utime}, {"frames", road.grid.frames()}};
+  const nlohmann::json meta{{"road_id", road.road_id},
+                            {"last_frame_utime", last_frame_utime},
+                            {"frames", road.grid.frames()},
+                            {"grid_hash", std::to_string(gridHash(road.grid))},
+                            {"stored_frames", stored}};
   io::writeFileAtomically(checkpointMeta(store, road.road_id).string(), meta.dump() + "\n");
 }
 
-void removeCheckpoint(const std::string& store, int64_t road_id) {
-  std::error_code ec;
-  std::filesystem::remove(checkpointPath(store, road_id), ec);
-  std::filesystem::remove(checkpointMeta(store, road_id), ec);
+bool removeCheckpoint(const std::string& store, int64_t road_id) {
+  // The grid first: a crash between leaves a JSON without a grid, which loadCheckpoints ignores
+  // (and removes); a JSON of another grid is never taken for its own (the hash).
+  bool ok = true;
+  for (const std::string& path : {checkpointPath(store, road_id), checkpointMeta(store, road_id).string()}) {
+    try {
+      io::removeFileDurably(path);
+    } catch (const io::IoError&) {
+      ok = false;
+    }
+  }
+  return ok;
 }
 
-std::vector<Checkpoint> loadCheckpoints(const std::string& store, std::vector<std::string>* errors) {
+std::vector<Checkpoint> loadCheckpoints(const std::string& store, std::vector<std::string>* errors,
+                                        std::vector<int64_t>* already_stored) {
   std::vector<Checkpoint> out;  // by road id, as roadFiles gives them
-  for (const auto& [road_id, path] : roadFiles(checkpointDir(store).string(), ".bev")) {
+  const auto grids = roadFiles(checkpointDir(store).string(), ".bev");
+  for (const auto& [road_id, path] : grids) {
     try {
       Checkpoint c;
       c.road_id = road_id;
@@ -108,12 +166,28 @@ std::vector<Checkpoint> loadCheckpoints(const std::string& store, std::vector<st
       std::ifstream meta(checkpointMeta(store, c.road_id));
       if (meta) {
         const auto j = nlohmann::json::parse(meta, nullptr, false);
-        if (j.is_object() && j.value("road_id", int64_t{-1}) == c.road_id) c.last_frame_utime = j.value("last_frame_utime", int64_t{0});
+        if (j.is_object() && j.value("road_id", int64_t{-1}) == c.road_id &&
+            j.value("grid_hash", std::string()) == std::to_string(gridHash(c.grid))) {
+          c.last_frame_utime = j.value("last_frame_utime", int64_t{0});
+          const int64_t stored_then = j.value("stored_frames", int64_t{-1});
+          const int64_t stored_now = storedFrames(roadGridPath(store, road_id));
+          if (stored_then >= 0 && stored_now > stored_then) {
+            removeCheckpoint(store, road_id);
+            if (already_stored) already_stored->push_back(road_id);
+            continue;
+          }
+        }
+        // Else the JSON is of an older checkpoint (a crash between the grid and its JSON): the
+        // grid is newer than anything stored, its newest frame unknown (0).
       }
       out.push_back(std::move(c));
     } catch (const std::exception& e) {
       if (errors) errors->push_back(path + ": " + e.what());
     }
+  }
+  // A JSON left without its grid (a crash while removing the checkpoint) is removed.
+  for (const auto& [road_id, path] : roadFiles(checkpointDir(store).string(), ".json")) {
+    if (!grids.count(road_id)) removeCheckpoint(store, road_id);
   }
   return out;
 }

@@ -7,7 +7,9 @@
 // <store>/bev/open/road_<id>.bev every few seconds (lanemap-bev-builder, `checkpoint` in its
 // config), with road_<id>.json beside it (the newest frame's time and the frame count); a BEV
 // builder that restarts mid-road carries on from it, and the checkpoint is removed when the road is
-// stored or given up. Each file is written atomically and durably (io::writeFileAtomically).
+// stored or given up. Each file is written atomically and durably (io::writeFileAtomically); a
+// crash or power loss at any moment leaves each file at its old or its new content, and
+// loadCheckpoints sorts out a pair caught between two steps (see storeCheckpoint).
 #pragma once
 
 #include "core/bev/bev_grid.h"
@@ -49,10 +51,17 @@ std::string checkpointPath(const std::string& store, int64_t road_id);
 // Writes the road's checkpoint (grid, then its JSON); throws on failure. last_frame_utime: the
 // newest frame projected into it.
 void storeCheckpoint(const std::string& store, const RoadBev& road, int64_t last_frame_utime);
-// Removes a road's checkpoint files (none: nothing happens).
-void removeCheckpoint(const std::string& store, int64_t road_id);
+// Removes a road's checkpoint files, durably (none: nothing happens); false when a file could not
+// be removed.
+bool removeCheckpoint(const std::string& store, int64_t road_id);
 // Every readable checkpoint in the store, by road id; one that does not load is named in *errors
-// (with why) and left on disk for a person to look at.
-std::vector<Checkpoint> loadCheckpoints(const std::string& store, std::vector<std::string>* errors = nullptr);
+// (with why) and left on disk for a person to look at. A checkpoint whose road was stored after it
+// (a crash between storeRoad and removeCheckpoint: the stored grid has more frames than when the
+// checkpoint was written) is removed and its road id put in *already_stored instead.
+std::vector<Checkpoint> loadCheckpoints(const std::string& store, std::vector<std::string>* errors = nullptr,
+                                        std::vector<int64_t>* already_stored = nullptr);
+// A hash of a grid's content (cells, counts, frames, resolution), the same whatever order its tiles
+// are in: what binds a checkpoint's JSON to its grid.
+uint64_t gridHash(const BevGrid& grid);
 
 }  // namespace lanemap::bev

@@ -802,15 +802,29 @@ std::string autowareProjectorInfo(const LaneMap& map) {
 
 void writeLanelet2(const LaneMap& map, const std::string& path, const Lanelet2WriteOptions& options) {
   const Lanelet2Document doc = toLanelet2Document(map, options, path);
-  // The sidecar first: a crash between the two leaves the old map with a sidecar whose hash does
-  // not match it, which the reader then ignores (it never pairs a map with foreign metadata).
+  // The map and its sidecar are two files; each is written atomically, and the pair moves from the
+  // old state to the new one without a moment where the map on disk has no sidecar of its own: the
+  // new sidecar goes to MAP.next.lanemap.json first (the reader finds a sidecar by the map's hash
+  // among the folder's *.lanemap.json), then the map, then the sidecar is renamed into place. A
+  // crash before the map's rename leaves the old map with its old sidecar; after it, the new map
+  // finds the new sidecar (under either name).
+  const std::string sidecar = lanelet2SidecarPath(path);
+  const std::string next = sidecar.substr(0, sidecar.size() - std::string(".lanemap.json").size()) + ".next.lanemap.json";
   if (options.write_sidecar) {
-    writeFileAtomically(lanelet2SidecarPath(path), doc.sidecar);
+    writeFileAtomically(next, doc.sidecar);
+    try {
+      writeFileAtomically(path, doc.osm);
+    } catch (const IoError&) {  // e.g. a full disk: the old map and its sidecar stay, nothing else
+      std::error_code ec;
+      std::filesystem::remove(next, ec);
+      throw;
+    }
+    renameFileDurably(next, sidecar);
   } else {
-    std::error_code ec;  // no stale sidecar of an earlier version of the map
-    std::filesystem::remove(lanelet2SidecarPath(path), ec);
+    removeFileDurably(next);  // no stale sidecar of an earlier version of the map
+    removeFileDurably(sidecar);
+    writeFileAtomically(path, doc.osm);
   }
-  writeFileAtomically(path, doc.osm);
   if (options.write_projector_info) {
     const auto dir = std::filesystem::path(path).parent_path();
     writeFileAtomically((dir / "map_projector_info.yaml").string(), autowareProjectorInfo(map));

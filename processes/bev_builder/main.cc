@@ -24,6 +24,7 @@
 #include "core/bev/bev_store.h"
 #include "core/camera/camera_model.h"
 #include "core/config/vehicle_config.h"
+#include "core/io/store_lock.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
 #include "lanemap/bev_preview_t.hpp"
@@ -39,6 +40,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 #include <iterator>
 #include <map>
@@ -69,7 +71,8 @@ class BevBuilderApp {
   // Roads whose checkpoints are in the store (a crash or kill of an earlier run) are active again.
   void recover() {
     std::vector<std::string> errors;
-    for (auto& c : bev::loadCheckpoints(store_, &errors)) {
+    std::vector<int64_t> already_stored;
+    for (auto& c : bev::loadCheckpoints(store_, &errors, &already_stored)) {
       const int frames = c.grid.frames();
       if (builder_.restoreRoad(c.road_id, std::move(c.grid), c.last_frame_utime)) {
         process_.counters().add("roads_recovered");
@@ -81,6 +84,10 @@ class BevBuilderApp {
         process_.counters().add("checkpoints_unusable");
         std::cerr << "bev_builder: checkpoint of road " << c.road_id << " does not fit this skeleton or grid: " << c.path << "\n";
       }
+    }
+    for (const int64_t id : already_stored) {  // killed between storing the road and removing its checkpoint
+      process_.counters().add("checkpoints_already_stored");
+      std::cerr << "bev_builder: checkpoint of road " << id << " was stored before the restart: removed, not carried on\n";
     }
     for (const auto& e : errors) {
       process_.counters().add("checkpoints_unreadable");
@@ -338,6 +345,10 @@ int main(int argc, char** argv) {
     const std::string vehicle = vehicle_flag.empty() ? resolveShippedFile(settings.vehicle) : vehicle_flag;
     if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the map config");
     if (store.empty()) throw std::runtime_error("no map store: give --store or `store:` in the config");
+    const io::StoreLock lock(store, "bev_builder");  // one BEV builder per store; a read-only store fails here
+    const int stale = io::removeStaleTemporaries((std::filesystem::path(store) / "bev").string()) +
+                      io::removeStaleTemporaries((std::filesystem::path(store) / "bev" / "open").string());
+    if (stale > 0) std::cerr << "bev_builder: removed " << stale << " temporaries a killed writer left in " << store << "/bev\n";
     auto sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(osm::readOsm(osm), settings.map.skeleton));
     const auto vehicle_config = config::VehicleConfig::fromYamlFile(vehicle);
     const camera::CameraModel& camera = vehicle_config.camera;
@@ -354,6 +365,9 @@ int main(int argc, char** argv) {
     const int rc = process.spin();
     app.finish();
     return rc;
+  } catch (const io::StoreInUseError& e) {
+    std::cerr << "bev_builder: " << e.what() << "\n";
+    return io::kExitStoreInUse;
   } catch (const std::exception& e) {
     std::cerr << "bev_builder: " << e.what() << "\n";
     return 2;

@@ -12,6 +12,7 @@
 //   lanemap-lane-mapper --config config/lane_mapper.yaml [--osm FILE] [--store DIR]
 #include "core/bev/bev_grid.h"
 #include "core/bev/bev_store.h"
+#include "core/io/store_lock.h"
 #include "core/intersections/regulatory.h"
 #include "core/io/lanelet2.h"
 #include "core/io/speed_limits.h"
@@ -74,7 +75,7 @@ class LaneMapperApp {
       : process_(process), sk_(std::move(sk)), options_(options), store_(std::move(store)),
         intersection_options_(std::move(intersection_options)), restrictions_(std::move(restrictions)) {
     write_options_.speed_limit_kmh_by_road = io::speedLimitsKmh(*sk_);  // OSM maxspeed
-    fs::create_directories(fs::path(store_) / "lanes");
+    io::createDirectories((fs::path(store_) / "lanes").string());
     reloadStore();
     catchUp();
     worker_ = std::thread([this] { work(); });
@@ -270,6 +271,10 @@ int main(int argc, char** argv) {
     const std::string store = store_flag.empty() ? settings.store : store_flag;
     if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the map config");
     if (store.empty()) throw std::runtime_error("no map store: give --store or `store:` in the config");
+    const lanemap::io::StoreLock lock(store, "lane_mapper");  // one lane mapper per store; a read-only store fails here
+    const int stale = lanemap::io::removeStaleTemporaries((fs::path(store) / "lanes").string()) +
+                      lanemap::io::removeStaleTemporaries(store);
+    if (stale > 0) std::cerr << "lane_mapper: removed " << stale << " temporaries a killed writer left in " << store << "\n";
     const lanemap::osm::OsmData osm_data = lanemap::osm::readOsm(osm);
     auto sk = std::make_unique<lanemap::skeleton::Skeleton>(lanemap::skeleton::Skeleton::build(osm_data, settings.map.skeleton));
     std::cerr << "lane_mapper: " << sk->roads().size() << " atomic roads from " << osm << ", store " << store << "\n";
@@ -277,6 +282,9 @@ int main(int argc, char** argv) {
                       settings.intersections, osm_data.restrictions);
     app.setControls(lanemap::intersections::readControlNodes(osm));
     return process.spin();
+  } catch (const lanemap::io::StoreInUseError& e) {
+    std::cerr << "lane_mapper: " << e.what() << "\n";
+    return lanemap::io::kExitStoreInUse;
   } catch (const std::exception& e) {
     std::cerr << "lane_mapper: " << e.what() << "\n";
     return 2;

@@ -29,6 +29,7 @@
 #include "lanemap/label_image_t.hpp"
 #include "processes/framework/channels.h"
 #include "processes/framework/lcm_log_writer.h"
+#include "processes/framework/log_reader.h"
 #include "processes/framework/process.h"
 #include "processes/framework/process_configs.h"
 #include "processes/segmenter/frame_queue.h"
@@ -173,11 +174,10 @@ class OracleApp {
 
 // Offline: every camera frame of a log segmented; returns the number of frames that failed.
 int64_t segmentLog(const std::string& in_path, const std::string& out_path, const Settings& s, seg::Segmenter& model) {
-  lcm::LogFile in(in_path, "r");
-  if (!in.good()) throw std::runtime_error("cannot read LCM log '" + in_path + "'");
+  LogReader in(in_path);  // a damaged log: what is readable is segmented, and said
   LcmLogWriter out(out_path);
   int64_t frames = 0, bad = 0;
-  while (const lcm::LogEvent* ev = in.readNextEvent()) {
+  while (const lcm::LogEvent* ev = in.next()) {
     out.write(ev->channel, ev->timestamp, ev->data, static_cast<size_t>(ev->datalen));
     if (ev->channel != s.camera_channel) continue;
     image_t img;
@@ -206,6 +206,8 @@ int64_t segmentLog(const std::string& in_path, const std::string& out_path, cons
     out.message(s.output_channel, ev->timestamp, lab);
     if (++frames % 100 == 0) std::cerr << "segmenter: " << frames << " frames\n";
   }
+  if (in.events() == 0) throw std::runtime_error("not an LCM log, or no whole event in it: " + in_path + " (" + in.damageReport() + ")");
+  if (in.damaged()) std::cerr << "segmenter: warning: the log is damaged, segmented what could be read: " << in.damageReport() << "\n";
   std::cerr << "segmenter: " << frames << " frames segmented into " << out_path << ", " << bad << " skipped\n";
   return bad;
 }

@@ -1,0 +1,159 @@
+// A truncated or corrupt LCM log (issue 18, docs/robustness.md): LogReader
+// (processes/framework/log_reader.h) reads every whole event and counts what it could not read;
+// lanemap-offline maps what is readable and says so (stderr, summary.json "log_read"), and a file
+// with no whole event in it is a clear error (exit 2) that leaves no map behind.
+#include "processes/framework/lcm_log_writer.h"
+#include "processes/framework/log_reader.h"
+#include "tests/bev/bev_replay.h"
+#include "tests/common/sim_drive.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace lanemap;
+namespace fs = std::filesystem;
+namespace lt = lanemap::testing;
+
+constexpr int kEvents = 20, kData = 1000;
+constexpr int64_t kEventBytes = 4 + 8 + 8 + 4 + 4 + 1 + kData;  // sync, number, time, lengths, channel "X", data
+
+std::string readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+void writeBytes(const std::string& path, const std::string& bytes) { std::ofstream(path, std::ios::binary) << bytes; }
+
+struct ReadResult {
+  int64_t events, skipped, unread;
+  std::vector<int64_t> times;
+};
+ReadResult readAll(const std::string& path) {
+  LogReader r(path);
+  ReadResult out{};
+  while (const lcm::LogEvent* ev = r.next()) out.times.push_back(ev->timestamp);
+  out.events = r.events();
+  out.skipped = r.bytesSkipped();
+  out.unread = r.bytesUnread();
+  return out;
+}
+
+TEST(LogReader, CountsTheEventsItReadAndTheBytesItCouldNot) {
+  lt::TempDir dir("damaged-log");
+  const std::string good = dir.str("good.lcmlog");
+  {
+    LcmLogWriter w(good);
+    const std::vector<uint8_t> data(kData, 0x55);
+    for (int i = 0; i < kEvents; ++i) w.write("X", 1000 * i, data.data(), data.size());
+  }
+  const std::string bytes = readBytes(good);
+  ASSERT_EQ(static_cast<int64_t>(bytes.size()), kEvents * kEventBytes);
+  const ReadResult whole = readAll(good);
+  EXPECT_EQ(whole.events, kEvents);
+  EXPECT_EQ(whole.skipped, 0);
+  EXPECT_EQ(whole.unread, 0);
+
+  // Cut in the middle of event 15 (a logger killed, a full disk): 15 whole events, the rest unread.
+  const int64_t cut = 15 * kEventBytes + 300;
+  writeBytes(dir.str("cut.lcmlog"), bytes.substr(0, cut));
+  const ReadResult c = readAll(dir.str("cut.lcmlog"));
+  EXPECT_EQ(c.events, 15);
+  EXPECT_EQ(c.skipped, 0);
+  EXPECT_EQ(c.unread, 300);
+  {
+    LogReader r(dir.str("cut.lcmlog"));
+    while (r.next()) {
+    }
+    EXPECT_TRUE(r.damaged());
+    EXPECT_NE(r.damageReport().find("the last 300 bytes (from byte " + std::to_string(15 * kEventBytes)), std::string::npos) << r.damageReport();
+  }
+
+  // 777 bytes of garbage between events 5 and 6: passed over to event 6's sync word. lcm trusts an
+  // event only when a sync word (or the end of the file) follows it, so event 5 goes too.
+  writeBytes(dir.str("garbage.lcmlog"), bytes.substr(0, 6 * kEventBytes) + std::string(777, '\0') + bytes.substr(6 * kEventBytes));
+  const ReadResult g = readAll(dir.str("garbage.lcmlog"));
+  EXPECT_EQ(g.events, kEvents - 1);
+  EXPECT_EQ(g.skipped, 777 + kEventBytes);
+  EXPECT_EQ(g.unread, 0);
+  std::vector<int64_t> without5 = whole.times;
+  without5.erase(without5.begin() + 5);
+  EXPECT_EQ(g.times, without5);
+
+  // Event 8's sync word overwritten: events 7 and 8 are lost (passed over), the others read.
+  std::string hit = bytes;
+  hit[8 * kEventBytes] = 0;
+  writeBytes(dir.str("hit.lcmlog"), hit);
+  const ReadResult h = readAll(dir.str("hit.lcmlog"));
+  EXPECT_EQ(h.events, kEvents - 2);
+  EXPECT_EQ(h.skipped, 2 * kEventBytes);
+  EXPECT_EQ(h.times.back(), 19000);
+
+  // Not a log at all.
+  std::mt19937 rng(3);
+  std::string noise(50000, '\0');
+  for (auto& ch : noise) ch = static_cast<char>(rng() & 0x7f);  // no 0xED: no sync word
+  writeBytes(dir.str("noise.lcmlog"), noise);
+  const ReadResult n = readAll(dir.str("noise.lcmlog"));
+  EXPECT_EQ(n.events, 0);
+  EXPECT_EQ(n.unread, 50000);
+  EXPECT_THROW(LogReader(dir.str("missing.lcmlog")), std::runtime_error);
+}
+
+TEST(DamagedLog, OfflineMapsWhatIsReadableSaysSoAndRefusesANonLog) {
+  const std::string drive = lt::sharedSimDrive("osm/west-oakland.osm", lt::kBevDriveSeconds, lt::kBevDriveSeed, lt::kBevDriveArgs);
+  ASSERT_FALSE(drive.empty());
+  lt::TempDir dir("damaged-offline");
+  const std::string bytes = readBytes(drive + "/drive.lcmlog");
+  const auto offline = [&](const std::string& log, const std::string& out) {
+    return lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --log " + log + " --osm " + drive + "/roads.osm --out " + out);
+  };
+  const auto summary = [](const std::string& out) { return nlohmann::json::parse(readBytes(out + "/summary.json")); };
+
+  int64_t events = 0, middle = 0;  // the whole log's events; where the event nearest its middle starts
+  {
+    LogReader whole(drive + "/drive.lcmlog");
+    while (whole.next()) {
+      if (whole.lastEventEnd() <= static_cast<int64_t>(bytes.size()) / 2) middle = whole.lastEventEnd();
+    }
+    ASSERT_FALSE(whole.damaged());
+    events = whole.events();
+  }
+
+  // Cut at 97 % of its bytes, inside an event, and with 4 KiB overwritten by noise from the start
+  // of the event in its middle.
+  std::string damaged = bytes.substr(0, bytes.size() * 97 / 100);
+  std::mt19937 rng(11);
+  for (size_t i = 0; i < 4096; ++i) damaged[middle + i] = static_cast<char>(rng());
+  writeBytes(dir.str("damaged.lcmlog"), damaged);
+  const auto d = offline(dir.str("damaged.lcmlog"), dir.str("damaged"));
+  ASSERT_EQ(d.exit_code, 0) << d.output;
+  EXPECT_NE(d.output.find("warning: the log is damaged, mapping what could be read"), std::string::npos) << d.output;
+  EXPECT_NE(d.output.find("are not a whole event"), std::string::npos) << d.output;
+  const auto sd = summary(dir.str("damaged"));
+  EXPECT_TRUE(sd["log_read"]["damaged"].get<bool>());
+  EXPECT_GT(sd["log_read"]["bytes_unread"].get<int64_t>(), 0);
+  EXPECT_GE(sd["log_read"]["bytes_skipped"].get<int64_t>(), 4096) << "the noise and the events it hit";
+  EXPECT_LT(sd["log_read"]["events"].get<int64_t>(), events);
+  EXPECT_GT(sd["log_read"]["events"].get<int64_t>(), events * 9 / 10);
+  EXPECT_GT(sd["lanelets"].get<int>(), 0) << "the readable part of the drive is mapped";
+  EXPECT_TRUE(fs::exists(dir.str("damaged/map.osm")));
+
+  // Not an LCM log: exit 2, a message that says so, no map written.
+  std::string noise(200000, '\0');
+  for (auto& ch : noise) ch = static_cast<char>(rng() & 0x7f);
+  writeBytes(dir.str("noise.lcmlog"), noise);
+  const auto n = offline(dir.str("noise.lcmlog"), dir.str("noise"));
+  EXPECT_EQ(n.exit_code, 2) << n.output;
+  EXPECT_NE(n.output.find("not an LCM log, or no whole event in it"), std::string::npos) << n.output;
+  EXPECT_FALSE(fs::exists(dir.str("noise/map.osm")));
+  EXPECT_FALSE(fs::exists(dir.str("noise/summary.json")));
+}
+
+}  // namespace

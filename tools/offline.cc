@@ -8,6 +8,12 @@
 // writes DIR/map.osm (Lanelet2), DIR/map.geojson, DIR/map.png, DIR/summary.json and
 // DIR/bev/road_<id>.bev.
 //
+// Several drives of one area: --log A --log B ... maps them in that order into one map. Each drive
+// has its own road tracker and BEV builder; a road that an earlier drive closed gets this drive's
+// BEV aligned to the earlier evidence and merged (bev::mergeAligned: both onto the traversals' mean),
+// then is explored again (summary.json "drives": every merge and its shift). --no-align merges as
+// it comes, to show what alignment removes.
+//
 // Labels: by default every CAMERA_FRONT frame is segmented with the configured model
 // (config/segmenter.yaml, as lanemap-segmenter does), so a real recording needs nothing else;
 // --oracle takes the simulator's SEMANTIC_FRONT_TRUTH instead, --semantic-channel any label
@@ -21,6 +27,7 @@
 //
 // One road's trouble never costs the map: a road whose exploration fails is named on stderr and in
 // summary.json (roads_failed, with the reason), and every other road is still mapped.
+#include "core/bev/bev_align.h"
 #include "core/bev/bev_builder.h"
 #include "core/bev/bev_store.h"
 #include "core/camera/camera_model.h"
@@ -68,7 +75,9 @@ using namespace lanemap;
 namespace {
 
 struct Options {
-  std::string log, osm, out;
+  std::vector<std::string> logs;  // one drive each, mapped in this order into one map
+  bool no_align = false;          // merge later drives' BEV unaligned (to measure what alignment does)
+  std::string osm, out;
   std::string semantic_channel;  // empty: segment CAMERA_FRONT with the model
   bool oracle = false;
   std::string segmenter_config = "config/segmenter.yaml";
@@ -114,10 +123,35 @@ class OfflineMapper {
  public:
   OfflineMapper(const Options& o, const OfflineConfig& c, const skeleton::Skeleton& sk,
                 const std::vector<osm::Restriction>& restrictions, std::unique_ptr<seg::Segmenter> model)
-      : o_(o), model_(std::move(model)), sk_(sk), tracker_(sk, c.tracker.tracker),
-        builder_(sk, c.vehicle.camera, bevOptions(o, c)),
-        explorer_(c.lanes.explorer),
-        assembler_(sk, c.lanes.intersections, restrictions) {}
+      : o_(o), c_(c), model_(std::move(model)), sk_(sk), explorer_(c.lanes.explorer),
+        assembler_(sk, c.lanes.intersections, restrictions) {
+    startDrive();
+  }
+
+  // Each drive (log) gets its own road tracker and BEV builder; the roads' evidence and lanes carry
+  // over. A road's BEV from this drive is merged unaligned within the drive (one pose error) and,
+  // when the road closes, merged aligned into what the earlier drives gave (bev::mergeAligned).
+  void startDrive() {
+    tracker_ = std::make_unique<tracking::RoadTracker>(sk_, c_.tracker.tracker);
+    builder_ = std::make_unique<bev::BevBuilder>(sk_, c_.vehicle.camera, bevOptions(o_, c_));
+    drive_log_ = nlohmann::json::array();
+  }
+  // After finish(): this drive's roads join the earlier drives' evidence. Returns the drive's
+  // alignments (one per road merged onto earlier drives).
+  nlohmann::json endDrive() {
+    const auto s = builder_->stats();
+    frames_projected_ += s.frames_projected;
+    frames_mesh_ += s.frames_mesh;
+    for (auto& [id, grid] : drive_grids_) {
+      auto f = fused_.find(id);
+      prior_[id] = f != fused_.end() ? std::move(f->second) : std::move(grid);
+      ++traversals_[id];
+    }
+    drive_grids_.clear();
+    fused_.clear();
+    ++drives_;
+    return std::move(drive_log_);
+  }
 
   void onEvent(const lcm::LogEvent& ev) {
     if (ev.channel == channels::kPose) {
@@ -125,7 +159,7 @@ class OfflineMapper {
       if (decode(ev, m)) onPose(m);
     } else if (!model_ && ev.channel == o_.semantic_channel) {
       label_image_t m;
-      if (decode(ev, m)) builder_.addEncodedFrame(m.utime, static_cast<bev::LabelEncoding>(m.encoding), m.data, m.width, m.height);
+      if (decode(ev, m)) builder_->addEncodedFrame(m.utime, static_cast<bev::LabelEncoding>(m.encoding), m.data, m.width, m.height);
     } else if (model_ && ev.channel == channels::kCameraFront) {
       image_t m;
       if (!decode(ev, m)) {
@@ -133,7 +167,7 @@ class OfflineMapper {
         return;
       }
       try {
-        builder_.addFrame(m.utime, model_->segment(seg::decodeFrame(m.pixelformat, m.width, m.height, m.row_stride,
+        builder_->addFrame(m.utime, model_->segment(seg::decodeFrame(m.pixelformat, m.width, m.height, m.row_stride,
                                                                      m.data.data(), m.data.size())));
         ++frames_segmented_;
       } catch (const seg::FrameError& e) {
@@ -141,13 +175,13 @@ class OfflineMapper {
       }
     } else if (ev.channel == channels::kLidarPackets && !o_.no_lidar) {
       lidar_packets_t m;
-      if (decode(ev, m)) builder_.addSweep(bev::SweepData{m.utime, m.packet_utime, m.data});
+      if (decode(ev, m)) builder_->addSweep(bev::SweepData{m.utime, m.packet_utime, m.data});
     }
     mapClosedRoads();
   }
 
   void finish() {
-    builder_.finish();
+    builder_->finish();
     mapClosedRoads();
   }
 
@@ -158,7 +192,8 @@ class OfflineMapper {
   // Per road explored: lanes found, or why it failed.
   const nlohmann::json& roadLog() const { return road_log_; }
   int roadsFailed() const { return roads_failed_; }
-  const bev::BevBuilder& builder() const { return builder_; }
+  int64_t framesProjected() const { return frames_projected_; }
+  int64_t framesMesh() const { return frames_mesh_; }
 
  private:
   static bev::BevBuilderOptions bevOptions(const Options& o, const OfflineConfig& c) {
@@ -171,33 +206,42 @@ class OfflineMapper {
 
   void onPose(const pose_t& m) {
     const EnuPose p = toEnuPose(m, sk_.frame());
-    builder_.addPose(toTimedPose(p));
-    for (const auto& e : tracker_.update(toPoseInput(p))) {
+    builder_->addPose(toTimedPose(p));
+    for (const auto& e : tracker_->update(toPoseInput(p))) {
       switch (e.type) {
-        case tracking::RoadEventType::kEnteredRoad: builder_.roadEntered(e.road_id, e.utime); break;
-        case tracking::RoadEventType::kReachedIntersection: builder_.roadClosed(e.road_id, e.utime); break;
+        case tracking::RoadEventType::kEnteredRoad: builder_->roadEntered(e.road_id, e.utime); break;
+        case tracking::RoadEventType::kReachedIntersection: builder_->roadClosed(e.road_id, e.utime); break;
         case tracking::RoadEventType::kLeftMap:
-        case tracking::RoadEventType::kPoseLost: builder_.roadsAbandoned(e.utime); break;
+        case tracking::RoadEventType::kPoseLost: builder_->roadsAbandoned(e.utime); break;
         default: break;
       }
     }
   }
 
   void mapClosedRoads() {
-    for (auto& road : builder_.takeClosed()) {
+    for (auto& road : builder_->takeClosed()) {
       // A road driven again: its grid accumulates, and it is explored again on everything seen.
-      auto [it, fresh] = grids_.try_emplace(road.road_id, road.grid);
+      auto [it, fresh] = drive_grids_.try_emplace(road.road_id, road.grid);
       if (!fresh) bev::mergeGrid(road.grid, it->second);
-      it->second.save((fs::path(o_.out) / "bev" / ("road_" + std::to_string(road.road_id) + ".bev")).string());
+      const bev::BevGrid* grid = &it->second;
+      if (const auto prior = prior_.find(road.road_id); prior != prior_.end()) {  // driven in an earlier drive
+        bev::BevGrid fused = prior->second;
+        const bev::Alignment a = bev::mergeAligned(it->second, fused, traversals_[road.road_id], !o_.no_align);
+        drive_log_.push_back({{"road_id", road.road_id}, {"traversals_before", traversals_[road.road_id]},
+                              {"aligned", a.ok}, {"shift_m", {a.shift_m.x(), a.shift_m.y()}},
+                              {"correlation", a.correlation}, {"overlap_cells", a.overlap_cells}, {"why", a.why}});
+        grid = &(fused_[road.road_id] = std::move(fused));
+      }
+      grid->save((fs::path(o_.out) / "bev" / ("road_" + std::to_string(road.road_id) + ".bev")).string());
       const auto* r = sk_.road(road.road_id);
       if (!r) continue;
-      nlohmann::json entry = {{"road_id", road.road_id}, {"from", r->from}, {"to", r->to}};
+      nlohmann::json entry = {{"road_id", road.road_id}, {"from", r->from}, {"to", r->to}, {"drive", drives_}};
       try {
-        const auto res = lanes::exploreRoad(it->second, lanes::RoadGeometry::fromSkeleton(*r), explorer_);
+        const auto res = lanes::exploreRoad(*grid, lanes::RoadGeometry::fromSkeleton(*r), explorer_);
         const auto& origin = sk_.frame().origin();
         map::LaneMap lanes_of_road = lanes::toLaneMap(res, origin.lat, origin.lon, origin.alt);
-        lanes::addStopLines(it->second, lanes_of_road);  // stop lines the BEV saw at the lanes' ends
-        crosswalks_[road.road_id] = lanes::findCrosswalks(it->second, lanes_of_road, 1);
+        lanes::addStopLines(*grid, lanes_of_road);  // stop lines the BEV saw at the lanes' ends
+        crosswalks_[road.road_id] = lanes::findCrosswalks(*grid, lanes_of_road, 1);
         assembler_.setRoad(road.road_id, std::move(lanes_of_road));
         ++roads_mapped_;
         entry["lanes"] = res.lanes.size();
@@ -213,13 +257,20 @@ class OfflineMapper {
   }
 
   const Options& o_;
+  const OfflineConfig& c_;
   std::unique_ptr<seg::Segmenter> model_;  // null: labels from o_.semantic_channel
   const skeleton::Skeleton& sk_;
-  tracking::RoadTracker tracker_;
-  bev::BevBuilder builder_;
+  std::unique_ptr<tracking::RoadTracker> tracker_;  // this drive's
+  std::unique_ptr<bev::BevBuilder> builder_;        // this drive's
   lanes::ExplorerOptions explorer_;
   mapping::MapAssembler assembler_;
-  std::map<int64_t, bev::BevGrid> grids_;
+  std::map<int64_t, bev::BevGrid> drive_grids_;  // this drive's evidence per road
+  std::map<int64_t, bev::BevGrid> prior_;        // the earlier drives' fused evidence per road
+  std::map<int64_t, int> traversals_;            // drives in prior_ per road
+  std::map<int64_t, bev::BevGrid> fused_;        // prior_ + this drive, aligned (roads in both)
+  nlohmann::json drive_log_ = nlohmann::json::array();
+  int drives_ = 0;
+  int64_t frames_projected_ = 0, frames_mesh_ = 0;
   std::map<int64_t, std::vector<map::Crosswalk>> crosswalks_;  // by road, from its BEV
 
  public:
@@ -248,8 +299,12 @@ std::unique_ptr<seg::Segmenter> loadModel(const Options& o) {
 
 int main(int argc, char** argv) {
   Options o;
-  CLI::App app{"Maps a recorded drive offline: the live graph's core stages on an LCM log, as fast as the CPU allows"};
-  app.add_option("--log", o.log, "LCM log of the drive (lanemap-sim's drive.lcmlog or an lcm-logger recording)")->required();
+  CLI::App app{"Maps a recorded drive offline: the live graph's core stages on an LCM log, as fast as the CPU allows.\n"
+               "Several --log: drives of one area mapped in that order into one map; a road driven in an earlier\n"
+               "drive gets the new drive's BEV aligned to its evidence (core/bev/bev_align.h) and is explored again."};
+  app.add_option("--log", o.logs, "LCM log of the drive (lanemap-sim's drive.lcmlog or an lcm-logger recording); repeatable")
+      ->required();
+  app.add_flag("--no-align", o.no_align, "merge later drives' BEV as it comes, unaligned (shows the blur alignment removes)");
   app.add_option("--osm", o.osm, "road-level OSM file of the area (.osm or .osm.pbf)")->required();
   app.add_option("--out", o.out, "output folder (created): map.osm, map.geojson, map.png, summary.json, bev/")->required();
   auto* oracle = app.add_flag("--oracle", o.oracle, "map on the simulator's truth labels (SEMANTIC_FRONT_TRUTH), no model");
@@ -279,53 +334,70 @@ int main(int argc, char** argv) {
     for (std::string* f : {&o.segmenter_config, &o.vehicle, &o.bev_config, &o.lanes_config, &o.tracker_config}) {
       *f = resolveShippedFile(*f);  // a relative name: the current folder, else the shipped configs
     }
-    if (!fs::exists(o.log)) throw std::runtime_error("no such log file: " + o.log);
+    for (const auto& l : o.logs) {
+      if (!fs::exists(l)) throw std::runtime_error("no such log file: " + l);
+    }
     const OfflineConfig config = loadConfig(o);
     const osm::OsmData osm_data = osm::readOsm(o.osm);
     const auto sk = skeleton::Skeleton::build(osm_data, config.lanes.map.skeleton);
-    LogReader log(o.log);  // a damaged log: what is readable is mapped, and said (summary.json "log")
     if (o.oracle) o.semantic_channel = channels::kSemanticFrontTruth;
     std::unique_ptr<seg::Segmenter> model;
     if (o.semantic_channel.empty()) model = loadModel(o);
     const std::string labels = model ? "model " + model->name() + " on " + channels::kCameraFront : o.semantic_channel;
     fs::create_directories(fs::path(o.out) / "bev");
     OfflineMapper mapper(o, config, sk, osm_data.restrictions, std::move(model));
-    const auto log_size = std::max<uintmax_t>(1, fs::file_size(o.log));
-    int64_t events = 0;
-    while (const lcm::LogEvent* ev = log.next()) {
-      mapper.onEvent(*ev);
-      if (!o.quiet && ++events % 2000 == 0) {
-        std::fprintf(stderr, "\rlanemap-offline: %3.0f %% of the log", 100.0 * log.position() / log_size);
+    nlohmann::json log_read = {{"events", 0}, {"bytes", 0}, {"bytes_skipped", 0}, {"bytes_unread", 0}};
+    bool damaged = false;
+    nlohmann::json drives = nlohmann::json::array();
+    for (size_t d = 0; d < o.logs.size(); ++d) {
+      const std::string& path = o.logs[d];
+      LogReader log(path);  // a damaged log: what is readable is mapped, and said (summary.json "log_read")
+      if (d > 0) mapper.startDrive();
+      const auto log_size = std::max<uintmax_t>(1, fs::file_size(path));
+      const int64_t undecodable_before = g_undecodable;
+      int64_t events = 0;
+      while (const lcm::LogEvent* ev = log.next()) {
+        mapper.onEvent(*ev);
+        if (!o.quiet && ++events % 2000 == 0) {
+          std::fprintf(stderr, "\rlanemap-offline: %3.0f %% of %s", 100.0 * log.position() / log_size,
+                       o.logs.size() > 1 ? ("log " + std::to_string(d + 1) + " of " + std::to_string(o.logs.size())).c_str() : "the log");
+        }
       }
+      if (log.events() == 0) throw std::runtime_error("not an LCM log, or no whole event in it: " + path + " (" + log.damageReport() + ")");
+      if (log.damaged() || g_undecodable > undecodable_before) {
+        std::fprintf(stderr, "lanemap-offline: warning: %s is damaged, mapping what could be read: %s; %lld messages did not decode\n",
+                     path.c_str(), log.damageReport().c_str(), static_cast<long long>(g_undecodable - undecodable_before));
+        damaged = true;
+      }
+      mapper.finish();
+      log_read["events"] = log_read["events"].get<int64_t>() + log.events();
+      log_read["bytes"] = log_read["bytes"].get<int64_t>() + log.fileSize();
+      log_read["bytes_skipped"] = log_read["bytes_skipped"].get<int64_t>() + log.bytesSkipped();
+      log_read["bytes_unread"] = log_read["bytes_unread"].get<int64_t>() + log.bytesUnread();
+      drives.push_back({{"log", path}, {"merged", mapper.endDrive()}});
     }
-    if (log.events() == 0) throw std::runtime_error("not an LCM log, or no whole event in it: " + o.log + " (" + log.damageReport() + ")");
-    if (log.damaged() || g_undecodable > 0) {
-      std::fprintf(stderr, "lanemap-offline: warning: the log is damaged, mapping what could be read: %s; %lld messages did not decode\n",
-                   log.damageReport().c_str(), static_cast<long long>(g_undecodable));
-    }
-    mapper.finish();
+    log_read["messages_undecodable"] = g_undecodable;
+    log_read["damaged"] = damaged;
     std::vector<std::string> junction_failures;
     map::LaneMap map = mapper.assembler().map(&junction_failures);
     // Stop signs, give way and traffic lights at the stop lines, from the OSM junction controls.
     intersections::addRegulatoryElements(map, sk, intersections::readControlNodes(o.osm));
     lanes::addCrosswalks(map, mapper.crosswalks());  // the crossings the BEV saw, both directions merged
     for (const auto& f : junction_failures) std::fprintf(stderr, "lanemap-offline: %s failed, the rest is mapped\n", f.c_str());
-    const auto s = mapper.builder().stats();
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    nlohmann::json summary = {{"log", o.log}, {"labels", labels}, {"roads_mapped", mapper.roadsMapped()},
+    nlohmann::json summary = {{"log", o.logs.front()}, {"labels", labels}, {"roads_mapped", mapper.roadsMapped()},
                               {"roads_failed", mapper.roadsFailed()}, {"roads", mapper.roadLog()},
                               {"intersections_failed", junction_failures},
-                              {"lanelets", map.lanelets.size()}, {"frames_projected", s.frames_projected},
+                              {"lanelets", map.lanelets.size()}, {"frames_projected", mapper.framesProjected()},
                               {"stop_lines", std::count_if(map.lines.begin(), map.lines.end(), [](const auto& l) {
                                  return l.type == map::LineType::kStopLine;
                                })},
                               {"regulatory_elements", map.regulatory_elements.size()},
                               {"crosswalks", map.crosswalks.size()},
-                              {"frames_mesh", s.frames_mesh}, {"frames_segmented", mapper.framesSegmented()},
+                              {"frames_mesh", mapper.framesMesh()}, {"frames_segmented", mapper.framesSegmented()},
                               {"frames_failed", mapper.framesFailed()}, {"seconds", secs},
-                              {"log_read", {{"events", log.events()}, {"bytes", log.fileSize()},
-                                            {"bytes_skipped", log.bytesSkipped()}, {"bytes_unread", log.bytesUnread()},
-                                            {"messages_undecodable", g_undecodable}, {"damaged", log.damaged() || g_undecodable > 0}}}};
+                              {"log_read", log_read}};
+    if (o.logs.size() > 1) summary["drives"] = drives;  // per drive: each road merged onto earlier drives, its alignment
     io::writeFileAtomically((fs::path(o.out) / "summary.json").string(), summary.dump(2) + "\n");
     if (map.lanelets.empty()) {
       throw std::runtime_error(mapper.roadsFailed() > 0 ? "no road was mapped: every road explored failed (see summary.json)"
@@ -346,7 +418,7 @@ int main(int argc, char** argv) {
     io::writeMapPng(map, (fs::path(o.out) / "map.png").string(), png);
     std::printf("lanemap-offline: %d roads mapped, %d failed, %zu lanelets; labels: %s; %lld frames projected (%lld on the LIDAR mesh); %.1f s\n",
                 mapper.roadsMapped(), mapper.roadsFailed(), map.lanelets.size(), labels.c_str(),
-                static_cast<long long>(s.frames_projected), static_cast<long long>(s.frames_mesh), secs);
+                static_cast<long long>(mapper.framesProjected()), static_cast<long long>(mapper.framesMesh()), secs);
     std::printf("wrote %s/map.osm, map.geojson, map.png, summary.json\n", o.out.c_str());
     return 0;
   } catch (const std::exception& e) {

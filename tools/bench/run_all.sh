@@ -45,6 +45,10 @@ tools/bench/live_graph.sh "$build"
 echo "== lanemap-viewer CPU at 1x (tools/bench/viewer_cpu.sh)"
 tools/bench/viewer_cpu.sh "$build"
 
+# Issue 14: drives of one world fused into one map, aligned and not (about 6 minutes).
+echo "== campaign: 3 drives of one West Oakland world fused (tools/bench/campaign.sh)"
+tools/bench/campaign.sh "$build" 3 60 "$out/campaign"
+
 # Issue 16: the broad benchmark (every OSM extract in data/, truth and model labels, --driven), the
 # figure of merit for the mapping stages; about 5 minutes of one core per drive, 28 drives.
 echo "== broad map-quality benchmark (tools/bench/quality.sh)"

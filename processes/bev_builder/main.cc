@@ -122,6 +122,14 @@ class BevBuilderApp {
     // Frames are projected in utime order, so older entries left here were skipped frames.
     received_.emplace(m->utime, rbuf->recv_utime);
     while (received_.size() > 200) received_.erase(received_.begin());
+    // Frames lost on the bus (a gap in the camera's seq; a seq that goes back is a restarted
+    // source): STATUS frames_missed and the share of the frames sent, frames_missed_pct.
+    const bool gap = last_label_seq_ >= 0 && m->seq > last_label_seq_ + 1 && m->seq - last_label_seq_ < 100000;
+    process_.counters().add("frames_missed", gap ? m->seq - last_label_seq_ - 1 : 0);
+    if (m->seq > last_label_seq_ || m->seq < last_label_seq_ - 100) last_label_seq_ = m->seq;
+    ++labels_received_;
+    const int64_t missed = process_.counters().get("frames_missed");
+    process_.counters().set("frames_missed_pct", 100 * missed / (missed + labels_received_));
     builder_.addEncodedFrame(m->utime, static_cast<bev::LabelEncoding>(m->encoding), m->data, m->width, m->height);
     afterMessage();
   }
@@ -321,6 +329,7 @@ class BevBuilderApp {
   std::chrono::steady_clock::time_point last_checkpoint_{};
   std::map<int64_t, int> checkpointed_;   // road -> frames in its checkpoint on disk
   int64_t last_projected_utime_ = 0;
+  int64_t last_label_seq_ = -1, labels_received_ = 0;
   int64_t recovered_frame_utime_ = 0;     // newest frame of the recovered checkpoints, until a frame comes
 };
 

@@ -92,6 +92,39 @@ nlohmann::json toGeoJson(const map::LaneMap& map) {
                         : json{{"type", "LineString"}, {"coordinates", positions(frame, line.points)}};
     features.push_back(feature(std::move(geometry), std::move(props)));
   }
+  // Traffic rules at the stop lines: the stop line is the geometry (a light: its bottom edge, too).
+  for (const auto& re : map.regulatory_elements) {
+    const map::LineString* stop = map.line(re.stop_line_id);
+    if (!stop || stop->points.size() < 2) continue;
+    json props{{"feature", "regulatory_element"},
+               {"id", re.id},
+               {"kind", map::toString(re.kind)},
+               {"stop_line_id", re.stop_line_id},
+               {"lanelets", re.lanelets},
+               {"priority", re.priority},
+               {"osm_node", re.osm_node >= 0 ? json(re.osm_node) : json(nullptr)}};
+    json lines = json::array({positions(frame, stop->points)});
+    if (re.kind == map::RegulatoryKind::kTrafficLight && re.light.size() >= 2) {
+      lines.push_back(positions(frame, re.light));
+      props["light_height_m"] = re.light_height_m;
+      props["light_estimated"] = re.light_estimated;
+    }
+    features.push_back(feature(json{{"type", "MultiLineString"}, {"coordinates", std::move(lines)}}, std::move(props)));
+  }
+  // Pedestrian crossings: the area between their two edges.
+  for (const auto& cw : map.crosswalks) {
+    if (cw.left.size() < 2 || cw.right.size() < 2) continue;
+    std::vector<Eigen::Vector3d> ring = cw.left;
+    ring.insert(ring.end(), cw.right.rbegin(), cw.right.rend());
+    double area2 = 0.0;
+    for (size_t i = 0; i < ring.size(); ++i) {
+      area2 += ring[i].x() * ring[(i + 1) % ring.size()].y() - ring[(i + 1) % ring.size()].x() * ring[i].y();
+    }
+    if (area2 < 0.0) std::reverse(ring.begin(), ring.end());
+    ring.push_back(ring.front());
+    json props{{"feature", "crosswalk"}, {"id", cw.id}, {"crossing", cw.crossing}, {"road_id", cw.road_id}};
+    features.push_back(feature(json{{"type", "Polygon"}, {"coordinates", json::array({positions(frame, ring)})}}, std::move(props)));
+  }
   return json{{"type", "FeatureCollection"},
               {"lanemap_origin", {{"lat", map.origin_lat}, {"lon", map.origin_lon}, {"alt", map.origin_alt}}},
               {"features", std::move(features)}};

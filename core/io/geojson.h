@@ -19,7 +19,14 @@ namespace lanemap::io {
 // - per lanelet with >= 2 centre points, a LineString: feature="centre_line", lanelet, kind,
 //   road_id, index_from_left, turn;
 // - per line string, a LineString (a Point when it has one point): feature="boundary", id,
-//   type ("dashed", "solid", "solid_solid", "curbstone", "virtual", "stop_line").
+//   type ("dashed", "solid", "solid_solid", "curbstone", "virtual", "stop_line");
+// - per regulatory element whose stop line exists, a MultiLineString (the stop line; a traffic
+//   light's estimated bottom edge second): feature="regulatory_element", id, kind ("stop_sign",
+//   "give_way", "traffic_light"), stop_line_id, lanelets (that obey or yield), priority (with right
+//   of way), osm_node (the OSM node whose tag gave it, or null); a light also light_height_m and
+//   light_estimated;
+// - per crosswalk with two edges, a Polygon between them: feature="crosswalk", id, crossing (the
+//   road lanelets under it), road_id.
 // Positions are [lon, lat, ele] (ele = origin_alt + z), lon/lat rounded to 1e-9 degrees
 // (0.1 mm). A foreign member "lanemap_origin" {lat, lon, alt} records the ENU origin.
 // Lanelets whose bound is missing get no polygon (their centre line is still written).

@@ -143,6 +143,67 @@ TEST(GeoJson, FeaturesPropertiesAndPositions) {
   EXPECT_EQ(j.at("lanemap_origin").at("lat"), 37.8);
 }
 
+TEST(GeoJson, RegulatoryElementsAndCrosswalks) {
+  LaneMap m = smallMap();
+  map::RegulatoryElement stop;
+  stop.id = 900;
+  stop.kind = map::RegulatoryKind::kStopSign;
+  stop.stop_line_id = 5;
+  stop.lanelets = {11};
+  stop.osm_node = 4242;
+  map::RegulatoryElement light = stop;
+  light.id = 901;
+  light.kind = map::RegulatoryKind::kTrafficLight;
+  light.light = {{0, 41, 3}, {0.5, 41, 3}};
+  light.osm_node = -1;
+  map::RegulatoryElement dangling = stop;  // its stop line is not in the map: not written
+  dangling.id = 902;
+  dangling.stop_line_id = 999;
+  m.regulatory_elements = {stop, light, dangling};
+  map::Crosswalk cw;
+  cw.id = 950;
+  cw.left = {{0, 30, 0}, {3.5, 30, 0}};   // the walker's left edge, from one curb to the other
+  cw.right = {{0, 27, 0}, {3.5, 27, 0}};
+  cw.crossing = {10, 11};
+  cw.road_id = 3;
+  m.crosswalks = {cw};
+  const json j = toGeoJson(m);
+  std::vector<json> rules, crossings;
+  for (const auto& f : j.at("features")) {
+    const std::string kind = f.at("properties").at("feature");
+    if (kind == "regulatory_element") rules.push_back(f);
+    if (kind == "crosswalk") crossings.push_back(f);
+  }
+  ASSERT_EQ(rules.size(), 2u);
+  EXPECT_EQ(rules[0].at("properties").at("id"), 900);
+  EXPECT_EQ(rules[0].at("properties").at("kind"), "stop_sign");
+  EXPECT_EQ(rules[0].at("properties").at("stop_line_id"), 5);
+  EXPECT_EQ(rules[0].at("properties").at("lanelets"), json::array({11}));
+  EXPECT_EQ(rules[0].at("properties").at("osm_node"), 4242);
+  EXPECT_EQ(rules[0].at("geometry").at("type"), "MultiLineString");
+  EXPECT_EQ(rules[0].at("geometry").at("coordinates").size(), 1u);  // the stop line
+  EXPECT_EQ(rules[1].at("properties").at("kind"), "traffic_light");
+  EXPECT_TRUE(rules[1].at("properties").at("osm_node").is_null());
+  EXPECT_EQ(rules[1].at("properties").at("light_estimated"), true);
+  ASSERT_EQ(rules[1].at("geometry").at("coordinates").size(), 2u);  // stop line, light
+  const geo::LocalFrame frame({m.origin_lat, m.origin_lon, m.origin_alt});
+  const auto light_end = frame.toWgs84(Eigen::Vector3d(0.5, 41, 3));
+  EXPECT_NEAR(rules[1].at("geometry").at("coordinates")[1][1][1].get<double>(), light_end.lat, 1e-8);
+  ASSERT_EQ(crossings.size(), 1u);
+  EXPECT_EQ(crossings[0].at("properties").at("crossing"), json::array({10, 11}));
+  EXPECT_EQ(crossings[0].at("properties").at("road_id"), 3);
+  const json& ring = crossings[0].at("geometry").at("coordinates").at(0);
+  ASSERT_EQ(ring.size(), 5u);  // four corners, closed
+  EXPECT_EQ(ring.front(), ring.back());
+  double area2 = 0.0;  // counter-clockwise, 3.5 m x 3 m
+  for (size_t i = 0; i + 1 < ring.size(); ++i) {
+    const auto a = frame.toEnu(ring[i][1].get<double>(), ring[i][0].get<double>());
+    const auto b = frame.toEnu(ring[i + 1][1].get<double>(), ring[i + 1][0].get<double>());
+    area2 += a.x() * b.y() - b.x() * a.y();
+  }
+  EXPECT_NEAR(area2 / 2, 10.5, 0.01);
+}
+
 TEST(GeoJson, EmptyMapIsAnEmptyCollection) {
   const json j = toGeoJson(LaneMap{});
   EXPECT_EQ(j.at("type"), "FeatureCollection");

@@ -63,6 +63,8 @@
         return { stroke: false, fillColor: junction ? '#3d6fb6' : '#4a4f57', fillOpacity: junction ? 0.35 : 0.75 };
       }
       if (p.feature === 'centre_line') return { color: p.kind === 'intersection' ? '#1c4f99' : '#66d9e8', weight: 1.5, opacity: 0.9 };
+      if (p.feature === 'regulatory_element') return { color: p.kind === 'traffic_light' ? '#f59f00' : '#e03131', weight: 4, opacity: 0.9 };
+      if (p.feature === 'crosswalk') return { stroke: false, fillColor: '#f8f9fa', fillOpacity: 0.45 };
       return BOUNDARY[p.type] || BOUNDARY.virtual;
     },
     pointToLayer: function (f, latlng) { return L.circleMarker(latlng, { radius: 2, pane: 'lanes' }); },

@@ -1,0 +1,338 @@
+// lanemap-bev-builder: SEMANTIC_FRONT (or SEMANTIC_FRONT_TRUTH), LIDAR_PACKETS, POSE and ROAD_EVENT
+// in; one BEV grid per closed atomic road out, written atomically to <store>/bev/road_<id>.bev and
+// announced on BEV_ROAD (METHOD.md section 3); about once a second a picture of the open road's grid
+// on BEV_OPEN for the viewer (config `preview`). Crash recovery: the open road's grid is
+// checkpointed every checkpoint.period_s to <store>/bev/open/ (core/bev/bev_store.h); a builder
+// that starts and finds checkpoints carries those roads on (STATUS roads_recovered,
+// frames_recovered, and recovered_gap_ms: the time between the checkpoint's newest frame and the
+// first frame after the restart, what the crash cost). A thin wrapper over core/bev/bev_builder.h; the mesh
+// of each LIDAR sweep is built in core's worker thread so LCM handling never waits for it, a frame
+// projection runs inline (tools/bench/bev_bench.cc: ~10-20 ms). Counters in STATUS.
+//
+// STATUS latency (p50/p99 of the last 500 frames) is this process's share of frame-to-BEV: from the
+// label message's receive time (lcm::ReceiveBuffer::recv_utime, wall clock, taken by LCM's receive
+// thread) to the end of the frame's projection into its road's grid. It includes the wait in LCM's
+// queue behind other messages, the PNG decode, the wait for a pose newer than the frame (poses come
+// at 100 Hz: up to ~10 ms) and the projection. Frames that are never projected (late, no pose,
+// queue full: their counters) have no latency. Camera-to-BEV is the segmenter's latency (camera
+// frame received -> labels published) plus this one; lanemap-graph-report prints both and their sum.
+//
+//   lanemap-bev-builder --config config/bev_builder.yaml [--osm FILE] [--store DIR] [--vehicle FILE]
+//                       [--semantic-channel SEMANTIC_FRONT_TRUTH] [--no-lidar]
+#pragma once
+
+#include "core/bev/bev_builder.h"
+#include "core/bev/bev_render.h"
+#include "core/bev/bev_store.h"
+#include "core/camera/camera_model.h"
+#include "core/config/vehicle_config.h"
+#include "core/io/store_lock.h"
+#include "core/osm/osm_data.h"
+#include "core/skeleton/skeleton.h"
+#include "lanemap/bev_preview_t.hpp"
+#include "lanemap/bev_road_t.hpp"
+#include "lanemap/label_image_t.hpp"
+#include "lanemap/lidar_packets_t.hpp"
+#include "lanemap/pose_t.hpp"
+#include "lanemap/road_event_t.hpp"
+#include "processes/framework/channels.h"
+#include "processes/framework/pose_conversion.h"
+#include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <iostream>
+#include <iterator>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace lanemap::bev_builder_app {
+
+
+using namespace lanemap;
+
+class BevBuilderApp {
+ public:
+  BevBuilderApp(Process& process, std::unique_ptr<skeleton::Skeleton> skeleton, const camera::CameraModel& camera,
+                const bev::BevBuilderOptions& options, std::string store)
+      : process_(process), skeleton_(std::move(skeleton)), builder_(*skeleton_, camera, options), store_(std::move(store)) {
+    builder_.setProjectedCallback([this](int64_t utime) { onProjected(utime); });
+  }
+
+  // BEV_OPEN: a picture at most every period_s seconds (wall clock; 0: never) while a road is open
+  // and has new frames, at most max_px on its longest side.
+  void setPreview(double period_s, int max_px) {
+    preview_period_s_ = period_s;
+    preview_max_px_ = max_px;
+  }
+  void setCheckpointPeriod(double period_s) { checkpoint_period_s_ = period_s; }
+
+  // Roads whose checkpoints are in the store (a crash or kill of an earlier run) are active again.
+  void recover() {
+    std::vector<std::string> errors;
+    std::vector<int64_t> already_stored;
+    for (auto& c : bev::loadCheckpoints(store_, &errors, &already_stored)) {
+      const int frames = c.grid.frames();
+      if (builder_.restoreRoad(c.road_id, std::move(c.grid), c.last_frame_utime)) {
+        process_.counters().add("roads_recovered");
+        process_.counters().add("frames_recovered", frames);
+        checkpointed_[c.road_id] = frames;
+        recovered_frame_utime_ = std::max(recovered_frame_utime_, c.last_frame_utime);
+        std::cerr << "bev_builder: recovered road " << c.road_id << " (" << frames << " frames) from " << c.path << "\n";
+      } else {
+        process_.counters().add("checkpoints_unusable");
+        std::cerr << "bev_builder: checkpoint of road " << c.road_id << " does not fit this skeleton or grid: " << c.path << "\n";
+      }
+    }
+    for (const int64_t id : already_stored) {  // killed between storing the road and removing its checkpoint
+      process_.counters().add("checkpoints_already_stored");
+      std::cerr << "bev_builder: checkpoint of road " << id << " was stored before the restart: removed, not carried on\n";
+    }
+    for (const auto& e : errors) {
+      process_.counters().add("checkpoints_unreadable");
+      std::cerr << "bev_builder: unreadable checkpoint " << e << "\n";
+    }
+  }
+
+  void subscribe(const std::string& semantic_channel, const BevBuilderSettings& s) {
+    const int q_pose = s.pose_queue, q_sem = s.semantic_queue, q_lidar = s.lidar_queue, q_event = s.road_event_queue;
+    auto& lcm = process_.lcm();
+    lcm.subscribe(channels::kPose, &BevBuilderApp::onPose, this)->setQueueCapacity(q_pose);
+    lcm.subscribe(semantic_channel, &BevBuilderApp::onLabels, this)->setQueueCapacity(q_sem);
+    lcm.subscribe(channels::kLidarPackets, &BevBuilderApp::onLidar, this)->setQueueCapacity(q_lidar);
+    lcm.subscribe(channels::kRoadEvent, &BevBuilderApp::onRoadEvent, this)->setQueueCapacity(q_event);
+  }
+
+  // After spin(): roads that were closing are handed over too.
+  void finish() {
+    builder_.finish();
+    writeClosed();
+    updateCounters();
+  }
+
+ private:
+  void onPose(const lcm::ReceiveBuffer*, const std::string&, const pose_t* m) {
+    builder_.addPose(toTimedPose(toEnuPose(*m, skeleton_->frame())));
+    afterMessage();
+  }
+
+  void onLabels(const lcm::ReceiveBuffer* rbuf, const std::string&, const label_image_t* m) {
+    // Projection may happen now or on a later pose: onProjected() finds the receive time here.
+    // Frames are projected in utime order, so older entries left here were skipped frames.
+    received_.emplace(m->utime, rbuf->recv_utime);
+    while (received_.size() > 200) received_.erase(received_.begin());
+    // Frames lost on the bus (a gap in the camera's seq; a seq that goes back is a restarted
+    // source): STATUS frames_missed and the share of the frames sent, frames_missed_pct.
+    const bool gap = last_label_seq_ >= 0 && m->seq > last_label_seq_ + 1 && m->seq - last_label_seq_ < 100000;
+    process_.counters().add("frames_missed", gap ? m->seq - last_label_seq_ - 1 : 0);
+    if (m->seq > last_label_seq_ || m->seq < last_label_seq_ - 100) last_label_seq_ = m->seq;
+    ++labels_received_;
+    const int64_t missed = process_.counters().get("frames_missed");
+    process_.counters().set("frames_missed_pct", 100 * missed / (missed + labels_received_));
+    builder_.addEncodedFrame(m->utime, static_cast<bev::LabelEncoding>(m->encoding), m->data, m->width, m->height);
+    afterMessage();
+  }
+
+  // Called by the builder (LCM thread, inside addPose/addEncodedFrame/finish) when a frame's
+  // projection has finished.
+  void onProjected(int64_t frame_utime) {
+    last_projected_utime_ = std::max(last_projected_utime_, frame_utime);
+    if (recovered_frame_utime_ > 0) {
+      process_.counters().set("recovered_gap_ms", (frame_utime - recovered_frame_utime_) / 1000);
+      recovered_frame_utime_ = 0;
+    }
+    const auto it = received_.find(frame_utime);
+    if (it == received_.end()) return;
+    process_.latency().add(static_cast<double>(nowUtime() - it->second) * 1e-3);
+    received_.erase(received_.begin(), std::next(it));
+  }
+
+  void onLidar(const lcm::ReceiveBuffer*, const std::string&, const lidar_packets_t* m) {
+    bev::SweepData s;
+    s.utime = m->utime;
+    s.packet_utime = m->packet_utime;
+    s.packets = m->data;
+    builder_.addSweep(std::move(s));
+    afterMessage();
+  }
+
+  void onRoadEvent(const lcm::ReceiveBuffer*, const std::string&, const road_event_t* m) {
+    switch (m->type) {
+      case road_event_t::TYPE_ENTERED_ROAD: builder_.roadEntered(m->road_id, m->utime); break;
+      case road_event_t::TYPE_REACHED_INTERSECTION: builder_.roadClosed(m->road_id, m->utime); break;
+      case road_event_t::TYPE_LEFT_MAP:
+      case road_event_t::TYPE_POSE_LOST: builder_.roadsAbandoned(m->utime); break;
+      default: break;
+    }
+    afterMessage();
+  }
+
+  void afterMessage() {
+    writeClosed();
+    checkpoint();
+    publishPreview();
+    updateCounters();  // a struct copy and ~30 map writes: cheap at ~250 messages/s
+  }
+
+  // The open road's grid to <store>/bev/open/ every checkpoint_period_s (wall clock) when it has
+  // new frames; checkpoints of roads no longer active are removed.
+  void checkpoint() {
+    if (checkpoint_period_s_ <= 0.0) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_checkpoint_ < std::chrono::duration<double>(checkpoint_period_s_)) return;
+    last_checkpoint_ = now;
+    std::optional<bev::RoadBev> open;
+    builder_.withOpenRoad([&](const bev::RoadBev& road) {
+      const auto it = checkpointed_.find(road.road_id);
+      if (road.grid.frames() > 0 && (it == checkpointed_.end() || it->second != road.grid.frames())) open = road;  // a copy
+    });
+    const auto active = builder_.accumulator().activeRoads();
+    for (auto it = checkpointed_.begin(); it != checkpointed_.end();) {
+      if (std::find(active.begin(), active.end(), it->first) == active.end()) {
+        bev::removeCheckpoint(store_, it->first);
+        it = checkpointed_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    if (!open) return;
+    try {
+      bev::storeCheckpoint(store_, *open, last_projected_utime_);
+      checkpointed_[open->road_id] = open->grid.frames();
+      const auto us = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - now).count();
+      auto& c = process_.counters();
+      c.add("checkpoints_written");
+      c.add("checkpoint_us_total", us);
+      c.set("checkpoint_us_max", std::max<int64_t>(c.get("checkpoint_us_max"), us));
+      c.set("checkpoint_kb", static_cast<int64_t>(open->grid.memoryBytes() / 1024));
+    } catch (const std::exception& e) {
+      process_.counters().add("checkpoints_failed");
+      std::cerr << "bev_builder: checkpoint of road " << open->road_id << ": " << e.what() << "\n";
+    }
+  }
+
+  void publishPreview() {
+    if (preview_period_s_ <= 0.0) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_preview_ < std::chrono::duration<double>(preview_period_s_)) return;
+    last_preview_ = now;
+    bev_preview_t msg;
+    bool drawn = false;
+    try {
+      builder_.withOpenRoad([&](const bev::RoadBev& road) {
+        if (road.grid.frames() == 0 || (road.road_id == preview_road_ && road.grid.frames() == preview_frames_)) return;
+        const bev::BevPicture pic = bev::bevPicture(road.grid, preview_max_px_);
+        preview_road_ = road.road_id;
+        preview_frames_ = road.grid.frames();
+        msg.road_id = road.road_id;
+        msg.num_frames = road.grid.frames();
+        msg.west = pic.enu.min().x();
+        msg.south = pic.enu.min().y();
+        msg.east = pic.enu.max().x();
+        msg.north = pic.enu.max().y();
+        msg.png = pic.png;
+        msg.size = static_cast<int32_t>(msg.png.size());
+        drawn = true;
+      });
+    } catch (const std::exception& e) {
+      process_.counters().add("previews_failed");
+      std::cerr << "bev_builder: preview: " << e.what() << "\n";
+      return;
+    }
+    if (!drawn) return;
+    msg.utime = nowUtime();
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - now).count();
+    process_.lcm().publish(channels::kBevOpen, &msg);
+    process_.counters().add("previews_published");
+    process_.counters().set("preview_us_max", std::max<int64_t>(process_.counters().get("preview_us_max"), static_cast<int64_t>(ms * 1e3)));
+  }
+
+  void writeClosed() {
+    for (auto& road : builder_.takeClosed()) {
+      try {
+        const auto stored = bev::storeRoad(store_, road);
+        publish(road, stored);
+        bev::removeCheckpoint(store_, road.road_id);  // after the road is stored: a crash between keeps both
+        checkpointed_.erase(road.road_id);
+        process_.counters().add("roads_written");
+      } catch (const std::exception& e) {
+        std::cerr << "bev_builder: road " << road.road_id << ": " << e.what() << "\n";
+        process_.counters().add("roads_write_failed");
+      }
+    }
+  }
+
+  void publish(const bev::RoadBev& road, const bev::StoredRoad& stored) {
+    bev_road_t msg;
+    msg.utime = road.closed_utime;
+    msg.road_id = road.road_id;
+    msg.from_node = road.from_node;
+    msg.to_node = road.to_node;
+    msg.path = stored.path;
+    msg.origin_east = stored.origin.x();
+    msg.origin_north = stored.origin.y();
+    msg.resolution_m = stored.resolution;
+    msg.width = stored.width;
+    msg.height = stored.height;
+    msg.num_frames = stored.frames;
+    process_.lcm().publish(channels::kBevRoad, &msg);
+  }
+
+  void updateCounters() {
+    const auto s = builder_.stats();
+    auto& c = process_.counters();
+    c.set("frames_received", s.frames_received);
+    c.set("frames_projected", s.frames_projected);
+    c.set("frames_mesh", s.frames_mesh);
+    c.set("frames_flat", s.frames_flat);
+    c.set("frames_decode_error", s.frames_decode_error);
+    c.set("frames_wrong_size", s.frames_wrong_size);
+    c.set("frames_unknown_class", s.frames_unknown_class);
+    c.set("frames_out_of_order", s.frames_out_of_order);
+    c.set("frames_late", s.frames_late);
+    c.set("frames_no_pose", s.frames_no_pose);
+    c.set("frames_queue_full", s.frames_queue_full);
+    c.set("frames_pending", static_cast<int64_t>(builder_.pendingFrames()));
+    c.set("poses_received", s.poses_received);
+    c.set("poses_invalid", s.poses_invalid);
+    c.set("poses_out_of_order", s.poses_out_of_order);
+    c.set("poses_duplicate", s.poses_duplicate);
+    c.set("pose_time_jumps", s.pose_time_jumps);
+    c.set("frames_time_jump", s.frames_time_jump);
+    c.set("sweeps_received", s.sweeps_received);
+    c.set("sweeps_meshed", s.sweeps_meshed);
+    c.set("sweeps_no_pose", s.sweeps_no_pose);
+    c.set("sweeps_replaced", s.sweeps_replaced);
+    c.set("roads_opened", s.roads_opened);
+    c.set("roads_closed", s.roads_closed);
+    c.set("roads_discarded", s.roads_discarded);
+    c.set("events_unknown_road", s.events_unknown_road);
+    c.set("project_us_max", static_cast<int64_t>(s.project_ms_max * 1e3));
+    c.set("project_us_mean", s.frames_projected ? static_cast<int64_t>(s.project_ms_sum * 1e3 / s.frames_projected) : 0);
+    c.set("mesh_us_max", static_cast<int64_t>(s.mesh_ms_max * 1e3));
+    c.set("mesh_us_mean", s.sweeps_meshed ? static_cast<int64_t>(s.mesh_ms_sum * 1e3 / s.sweeps_meshed) : 0);
+    c.set("active_roads", static_cast<int64_t>(builder_.accumulator().activeRoads().size()));
+  }
+
+  Process& process_;
+  std::unique_ptr<skeleton::Skeleton> skeleton_;
+  bev::BevBuilder builder_;
+  std::string store_;
+  std::map<int64_t, int64_t> received_;  // label utime -> recv_utime, frames not yet projected
+  double preview_period_s_ = 1.0;
+  int preview_max_px_ = 512;
+  std::chrono::steady_clock::time_point last_preview_{};
+  int64_t preview_road_ = -1;
+  int preview_frames_ = 0;
+  double checkpoint_period_s_ = 2.0;
+  std::chrono::steady_clock::time_point last_checkpoint_{};
+  std::map<int64_t, int> checkpointed_;   // road -> frames in its checkpoint on disk
+  int64_t last_projected_utime_ = 0;
+  int64_t last_label_seq_ = -1, labels_received_ = 0;
+  int64_t recovered_frame_utime_ = 0;     // newest frame of the recovered checkpoints, until a frame comes
+};
+
+}  // namespace lanemap::bev_builder_app

@@ -1,0 +1,261 @@
+// lanemap-lane-mapper: runs lane exploration (core/lanes/explorer.h) on every closed atomic road
+// announced on BEV_ROAD, on a worker thread (a long road does not stall LCM handling), stores the
+// road's lanes in the map store atomically (<store>/lanes/road_<id>.osm, Lanelet2, plus the whole
+// <store>/lane_map.osm) and publishes LANE_MAP. On start it reloads the store and republishes it, so
+// a restart loses no finished road, and maps the roads whose BEV grid is newer than their lanes
+// (announced while it was down: STATUS roads_caught_up).
+//
+// STATUS latency (per road): from the BEV_ROAD message's receive time (lcm::ReceiveBuffer::recv_utime)
+// to its LANE_MAP published: the wait behind other roads, loading the grid, lane exploration and
+// rewriting lane_map.osm. map_road_ms_max: exploring one road and writing its files, the worst road.
+//
+//   lanemap-lane-mapper --config config/lane_mapper.yaml [--osm FILE] [--store DIR]
+#pragma once
+
+#include "core/bev/bev_grid.h"
+#include "core/bev/bev_store.h"
+#include "core/io/store_lock.h"
+#include "core/intersections/regulatory.h"
+#include "core/io/lanelet2.h"
+#include "core/io/speed_limits.h"
+#include "core/lanes/explorer.h"
+#include "core/lanes/stop_lines.h"
+#include "core/mapping/map_assembler.h"
+#include "core/skeleton/skeleton.h"
+#include "lanemap/bev_road_t.hpp"
+#include "lanemap/lane_map_t.hpp"
+#include "processes/framework/channels.h"
+#include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+namespace lanemap::lane_mapper_app {
+
+
+namespace fs = std::filesystem;
+using namespace lanemap;
+
+inline int8_t polylineType(map::LineType t) {
+  switch (t) {
+    case map::LineType::kDashed: return polyline_t::TYPE_DASHED;
+    case map::LineType::kSolid:
+    case map::LineType::kSolidSolid: return polyline_t::TYPE_SOLID;
+    case map::LineType::kCurb: return polyline_t::TYPE_CURB;
+    case map::LineType::kVirtual: return polyline_t::TYPE_VIRTUAL;
+    case map::LineType::kStopLine: return polyline_t::TYPE_STOP_LINE;
+  }
+  return polyline_t::TYPE_UNKNOWN;
+}
+
+inline polyline_t toPolyline(const std::vector<Eigen::Vector3d>& pts, int8_t type) {
+  polyline_t p;
+  p.num_points = static_cast<int32_t>(pts.size());
+  for (const auto& q : pts) {
+    p.east.push_back(q.x());
+    p.north.push_back(q.y());
+    p.up.push_back(q.z());
+  }
+  p.type = type;
+  return p;
+}
+
+class LaneMapperApp {
+ public:
+  LaneMapperApp(Process& process, std::unique_ptr<skeleton::Skeleton> sk, lanes::ExplorerOptions options,
+                std::string store, const std::string& channel, int queue,
+                intersections::IntersectionOptions intersection_options, std::vector<osm::Restriction> restrictions)
+      : process_(process), sk_(std::move(sk)), options_(options), store_(std::move(store)),
+        intersection_options_(std::move(intersection_options)), restrictions_(std::move(restrictions)) {
+    write_options_.speed_limit_kmh_by_road = io::speedLimitsKmh(*sk_);  // OSM maxspeed
+    io::createDirectories((fs::path(store_) / "lanes").string());
+    reloadStore();
+    catchUp();
+    worker_ = std::thread([this] { work(); });
+    auto* sub = process_.lcm().subscribe(channel, &LaneMapperApp::onBevRoad, this);
+    sub->setQueueCapacity(queue);
+    process_.setState("ready");
+  }
+  ~LaneMapperApp() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    worker_.join();
+  }
+
+ private:
+  void onBevRoad(const lcm::ReceiveBuffer* rbuf, const std::string&, const bev_road_t* msg) {
+    process_.counters().add("bev_roads_received");
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      jobs_.push_back(Job{*msg, rbuf->recv_utime});
+      process_.counters().set("queue_length", static_cast<int64_t>(jobs_.size()));
+    }
+    cv_.notify_one();
+  }
+
+  void work() {
+    for (;;) {
+      Job job;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [this] { return stop_ || !jobs_.empty(); });
+        if (stop_) return;
+        job = jobs_.front();
+        jobs_.pop_front();
+        process_.counters().set("queue_length", static_cast<int64_t>(jobs_.size()));
+      }
+      try {
+        mapRoad(job.road);
+        process_.latency().add(static_cast<double>(nowUtime() - job.recv_utime) * 1e-3);
+      } catch (const std::exception& e) {
+        process_.counters().add("roads_failed");
+        std::cerr << "lane_mapper: road " << job.road.road_id << ": " << e.what() << "\n";
+      }
+    }
+  }
+
+  void mapRoad(const bev_road_t& job) {
+    const skeleton::AtomicRoad* road = sk_->road(job.road_id);
+    if (!road) throw std::runtime_error("unknown road id " + std::to_string(job.road_id));
+    const bev::BevGrid grid = bev::BevGrid::load(job.path);
+    const auto t0 = std::chrono::steady_clock::now();
+    const lanes::ExplorationResult res = lanes::exploreRoad(grid, lanes::RoadGeometry::fromSkeleton(*road), options_);
+    const auto& o = sk_->frame().origin();
+    map::LaneMap m = lanes::toLaneMap(res, o.lat, o.lon, o.alt);
+    lanes::addStopLines(grid, m);  // stop lines the BEV saw at the lanes' ends
+    int64_t next_id = 1;
+    for (const auto& l : m.lines) next_id = std::max(next_id, l.id + 1);
+    for (const auto& l : m.lanelets) next_id = std::max(next_id, l.id + 1);
+    m.crosswalks = lanes::findCrosswalks(grid, m, next_id);  // kept with the road's file
+    io::writeLanelet2(m, roadFile(job.road_id), write_options_);  // atomic: a crash leaves the old file or the new one
+    {
+      std::lock_guard<std::mutex> lock(roads_mutex_);
+      roads_[job.road_id] = m;
+      writeWholeMap();
+    }
+    const double map_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    map_road_ms_max_ = std::max(map_road_ms_max_, map_ms);
+    process_.counters().set("map_road_ms_max", static_cast<int64_t>(map_road_ms_max_ + 0.5));
+    process_.counters().add("roads_mapped");
+    process_.counters().add("lanes_found", static_cast<int64_t>(res.lanes.size()));
+    publish(job.road_id, m, job.utime);
+  }
+
+  std::string roadFile(int64_t id) const { return (fs::path(store_) / "lanes" / ("road_" + std::to_string(id) + ".osm")).string(); }
+  std::string wholeMapFile() const { return (fs::path(store_) / "lane_map.osm").string(); }
+
+  // Roads plus the intersections between them (core/mapping, as the offline runner does).
+  void writeWholeMap() {
+    mapping::MapAssembler assembler(*sk_, intersection_options_, restrictions_);
+    for (const auto& [id, m] : roads_) assembler.setRoad(id, m);
+    std::vector<std::string> failures;
+    map::LaneMap all = assembler.map(&failures);
+    intersections::addRegulatoryElements(all, *sk_, controls_);  // OSM stop / give way / signals
+    std::vector<map::Crosswalk> crosswalks;
+    for (const auto& [id, m] : roads_) crosswalks.insert(crosswalks.end(), m.crosswalks.begin(), m.crosswalks.end());
+    lanes::addCrosswalks(all, std::move(crosswalks));  // both directions of a crossing merged
+    for (const auto& f : failures) std::cerr << "lane_mapper: " << f << " failed, the rest is mapped\n";
+    process_.counters().set("intersections_failed", static_cast<int64_t>(failures.size()));
+    if (!all.lanelets.empty()) io::writeLanelet2(all, wholeMapFile(), write_options_);
+  }
+
+  void reloadStore() {
+    const auto& o = sk_->frame().origin();
+    io::Lanelet2ReadOptions ro;
+    ro.origin_alt = o.alt;
+    for (const auto& [id, path] : bev::roadFiles((fs::path(store_) / "lanes").string(), ".osm")) {
+      try {
+        roads_[id] = io::readLanelet2(path, o.lat, o.lon, ro);
+        process_.counters().add("roads_loaded");
+      } catch (const std::exception& e) {
+        std::cerr << "lane_mapper: skipping " << path << ": " << e.what() << "\n";
+      }
+    }
+    for (const auto& [id, m] : roads_) publish(id, m, nowUtime());
+  }
+
+  // A road whose BEV grid is in the store but whose lanes are missing or older (its BEV_ROAD came
+  // while this process was down, e.g. killed and restarted): mapped now, as if announced.
+  void catchUp() {
+    std::error_code ec;
+    for (const auto& [id, path] : bev::roadFiles((fs::path(store_) / "bev").string(), ".bev")) {
+      const std::string lanes = roadFile(id);
+      if (fs::exists(lanes, ec) && fs::last_write_time(lanes, ec) >= fs::last_write_time(path, ec)) continue;
+      Job job;
+      job.road.road_id = id;
+      job.road.path = path;
+      job.road.utime = nowUtime();
+      job.recv_utime = nowUtime();
+      jobs_.push_back(job);
+      process_.counters().add("roads_caught_up");
+      std::cerr << "lane_mapper: road " << id << " has a BEV grid but no lanes newer than it: mapping it now\n";
+    }
+  }
+
+  void publish(int64_t road_id, const map::LaneMap& m, int64_t utime) {
+    lane_map_t msg;
+    msg.utime = utime;
+    msg.kind = lane_map_t::KIND_ROAD;
+    msg.id = road_id;
+    msg.origin_latitude = m.origin_lat;
+    msg.origin_longitude = m.origin_lon;
+    msg.origin_altitude = m.origin_alt;
+    for (const auto& ll : m.lanelets) {
+      lane_t lane;
+      lane.lane_id = ll.id;
+      lane.index_from_left = ll.index_from_left;
+      lane.centre = toPolyline(ll.centre, polyline_t::TYPE_VIRTUAL);
+      const map::LineString* l = m.line(ll.left_id);
+      const map::LineString* r = m.line(ll.right_id);
+      lane.left_boundary = l ? toPolyline(l->points, polylineType(l->type)) : toPolyline({}, polyline_t::TYPE_UNKNOWN);
+      lane.right_boundary = r ? toPolyline(r->points, polylineType(r->type)) : toPolyline({}, polyline_t::TYPE_UNKNOWN);
+      lane.successors = ll.successors;
+      lane.num_successors = static_cast<int32_t>(ll.successors.size());
+      msg.lanes.push_back(std::move(lane));
+    }
+    msg.num_lanes = static_cast<int32_t>(msg.lanes.size());
+    msg.map_path = wholeMapFile();
+    std::lock_guard<std::mutex> lock(publish_mutex_);
+    process_.lcm().publish(channels::kLaneMap, &msg);
+    process_.counters().add("lane_maps_published");
+  }
+
+  Process& process_;
+  std::unique_ptr<skeleton::Skeleton> sk_;
+  lanes::ExplorerOptions options_;
+  std::string store_;
+  std::mutex mutex_, roads_mutex_, publish_mutex_;
+  std::condition_variable cv_;
+  struct Job {
+    bev_road_t road;
+    int64_t recv_utime = 0;  // when LCM received the BEV_ROAD (wall clock)
+  };
+  std::deque<Job> jobs_;
+  double map_road_ms_max_ = 0.0;  // worker thread only
+  bool stop_ = false;
+  std::map<int64_t, map::LaneMap> roads_;
+  intersections::IntersectionOptions intersection_options_;
+  std::vector<osm::Restriction> restrictions_;
+  std::unordered_map<int64_t, intersections::ControlNode> controls_;  // set before spin()
+
+ public:
+  void setControls(std::unordered_map<int64_t, intersections::ControlNode> c) { controls_ = std::move(c); }
+
+ private:
+  io::Lanelet2WriteOptions write_options_;
+  std::thread worker_;
+};
+
+}  // namespace lanemap::lane_mapper_app

@@ -1,0 +1,338 @@
+// lanemap-viewer: the live map in a browser. Subscribes to POSE, ROAD_EVENT, BEV_ROAD, BEV_OPEN,
+// LANE_MAP and STATUS, keeps what a person wants to see in core/viewer/viewer_state.h (car and
+// trail, the skeleton coloured by coverage, the BEV of the open road (its picture, ~1 Hz) or of the
+// road last handed over, the mapped lanes and
+// intersections, every process's health) and serves it with the bundled page (web/viewer, Leaflet
+// from npm, built into build/share/lanemap/viewer) on http://127.0.0.1:8765/ (core/viewer/
+// http_server.h, Boost.Beast). The page updates itself from a server-sent event stream.
+//
+//   lanemap-viewer --osm roads.osm [--config config/viewer.yaml] [--listen 127.0.0.1] [--port 8765]
+//   lanemap-viewer --store DIR --osm roads.osm     browse a finished map store: no LCM at all
+//
+// Endpoints: / (the page), /api/state, /api/events (text/event-stream), /api/skeleton.geojson,
+// /api/lanes.geojson, /api/trail?from=N, /api/bev.png, /download/lane_map.osm (Lanelet2),
+// /download/lane_map.geojson. Anything else is one of the bundled files or 404.
+//
+// STATUS latency (per LANE_MAP): from the message's receive time to the map reassembled
+// (roads + intersections, core/mapping) and ready to serve.
+#pragma once
+
+#include "core/bev/bev_grid.h"
+#include "core/bev/bev_store.h"
+#include "core/io/lanelet2.h"
+#include "core/skeleton/skeleton.h"
+#include "core/viewer/http_server.h"
+#include "core/viewer/viewer_state.h"
+#include "lanemap/bev_preview_t.hpp"
+#include "lanemap/bev_road_t.hpp"
+#include "lanemap/lane_map_t.hpp"
+#include "lanemap/pose_t.hpp"
+#include "lanemap/road_event_t.hpp"
+#include "lanemap/status_t.hpp"
+#include "processes/framework/channels.h"
+#include "processes/framework/pose_conversion.h"
+#include "processes/framework/process.h"
+#include "processes/framework/process_configs.h"
+#include <lcm/lcm-cpp.hpp>
+#include <unistd.h>
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <regex>
+#include <string>
+#include <vector>
+
+namespace lanemap::viewer_app {
+
+
+namespace fs = std::filesystem;
+using namespace lanemap;
+
+inline double monotonicSeconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+inline map::LineType lineType(int8_t t) {
+  switch (t) {
+    case polyline_t::TYPE_DASHED: return map::LineType::kDashed;
+    case polyline_t::TYPE_SOLID: return map::LineType::kSolid;
+    case polyline_t::TYPE_CURB: return map::LineType::kCurb;
+    case polyline_t::TYPE_STOP_LINE: return map::LineType::kStopLine;
+    default: return map::LineType::kVirtual;
+  }
+}
+
+inline std::vector<Eigen::Vector3d> points(const polyline_t& p) {
+  std::vector<Eigen::Vector3d> out;
+  const size_t n = std::min({static_cast<size_t>(std::max(0, p.num_points)), p.east.size(), p.north.size(), p.up.size()});
+  for (size_t i = 0; i < n; ++i) out.emplace_back(p.east[i], p.north[i], p.up[i]);
+  return out;
+}
+
+// LANE_MAP (one road's lanes) as a LaneMap: one lanelet per lane, its two boundaries as line
+// strings of their own, with ids clear of the lane mapper's road ids ((road + 1) * 100000 + n) and
+// of the intersections' (config/intersections.yaml id_base: 1e12 + 100000 * intersection).
+inline map::LaneMap fromMessage(const lane_map_t& msg, const skeleton::Skeleton& sk) {
+  map::LaneMap m;
+  m.origin_lat = msg.origin_latitude;
+  m.origin_lon = msg.origin_longitude;
+  m.origin_alt = msg.origin_altitude;
+  const skeleton::AtomicRoad* road = sk.road(msg.id);
+  int64_t next_line = 5'000'000'000'000LL + std::max<int64_t>(0, msg.id) * 100'000;
+  for (const auto& lane : msg.lanes) {
+    map::Lanelet ll;
+    ll.id = lane.lane_id;
+    ll.kind = map::LaneletKind::kRoad;
+    ll.road_id = msg.id;
+    if (road) {
+      ll.from_node = road->from;
+      ll.to_node = road->to;
+    }
+    ll.index_from_left = lane.index_from_left;
+    ll.centre = points(lane.centre);
+    ll.successors = lane.successors;
+    for (const polyline_t* b : {&lane.left_boundary, &lane.right_boundary}) {
+      auto pts = points(*b);
+      if (pts.size() < 2) continue;
+      map::LineString ls;
+      ls.id = next_line++;
+      ls.type = lineType(b->type);
+      ls.points = std::move(pts);
+      (b == &lane.left_boundary ? ll.left_id : ll.right_id) = ls.id;
+      m.lines.push_back(std::move(ls));
+    }
+    m.lanelets.push_back(std::move(ll));
+  }
+  return m;
+}
+
+inline viewer::ProcessStatus fromMessage(const status_t& s) {
+  viewer::ProcessStatus p;
+  p.process = s.process;
+  p.host = s.host;
+  p.state = s.state;
+  p.pid = s.pid;
+  for (size_t i = 0; i < s.counter_names.size() && i < s.counter_values.size(); ++i) p.counters[s.counter_names[i]] = s.counter_values[i];
+  p.latency_p50_ms = s.latency_p50_ms;
+  p.latency_p99_ms = s.latency_p99_ms;
+  p.cpu_fraction = s.cpu_fraction;
+  return p;
+}
+
+// Feeds the state from the bus.
+class LiveFeed {
+ public:
+  LiveFeed(Process& process, viewer::ViewerState& state, int pose_queue) : process_(process), state_(state) {
+    process_.lcm().subscribe(channels::kPose, &LiveFeed::onPose, this)->setQueueCapacity(pose_queue);
+    process_.lcm().subscribe(channels::kRoadEvent, &LiveFeed::onRoadEvent, this)->setQueueCapacity(100);
+    process_.lcm().subscribe(channels::kBevRoad, &LiveFeed::onBevRoad, this)->setQueueCapacity(20);
+    process_.lcm().subscribe(channels::kBevOpen, &LiveFeed::onBevOpen, this)->setQueueCapacity(2);
+    process_.lcm().subscribe(channels::kLaneMap, &LiveFeed::onLaneMap, this)->setQueueCapacity(100);
+    process_.lcm().subscribe(channels::kStatus, &LiveFeed::onStatus, this)->setQueueCapacity(100);
+  }
+
+ private:
+  void onPose(const lcm::ReceiveBuffer*, const std::string&, const pose_t* msg) {
+    process_.counters().add("poses_received");
+    const EnuPose p = toEnuPose(*msg, state_.skeleton().frame());
+    if (!p.valid) {
+      process_.counters().add("poses_invalid");
+      return;
+    }
+    state_.onPose(msg->utime, msg->latitude, msg->longitude, p.heading);
+  }
+  void onRoadEvent(const lcm::ReceiveBuffer*, const std::string&, const road_event_t* msg) {
+    process_.counters().add("road_events_received");
+    if (msg->type == road_event_t::TYPE_ENTERED_ROAD) state_.onRoadEntered(msg->road_id);
+    if (msg->type == road_event_t::TYPE_REACHED_INTERSECTION) state_.onRoadClosed(msg->road_id);
+  }
+  void onBevRoad(const lcm::ReceiveBuffer*, const std::string&, const bev_road_t* msg) {
+    process_.counters().add("bev_roads_received");
+    try {
+      state_.setBev(msg->road_id, bev::BevGrid::load(msg->path));
+    } catch (const std::exception& e) {
+      // The grid lives in the map store of the BEV builder's host: not readable from every host.
+      process_.counters().add("bev_unreadable");
+      std::cerr << "viewer: BEV of road " << msg->road_id << ": " << e.what() << "\n";
+    }
+  }
+  // The open road's picture: only the newest matters (queue of 2).
+  void onBevOpen(const lcm::ReceiveBuffer*, const std::string&, const bev_preview_t* msg) {
+    process_.counters().add("bev_previews_received");
+    bev::BevPicture pic;
+    pic.png.assign(msg->png.begin(), msg->png.end());
+    pic.enu = Eigen::AlignedBox2d(Eigen::Vector2d(msg->west, msg->south), Eigen::Vector2d(msg->east, msg->north));
+    try {
+      if (!state_.setOpenRoadBev(msg->road_id, pic)) process_.counters().add("bev_previews_stale");
+    } catch (const std::exception& e) {
+      process_.counters().add("bev_previews_bad");
+      std::cerr << "viewer: BEV_OPEN of road " << msg->road_id << ": " << e.what() << "\n";
+    }
+  }
+  void onLaneMap(const lcm::ReceiveBuffer* rbuf, const std::string&, const lane_map_t* msg) {
+    process_.counters().add("lane_maps_received");
+    if (msg->kind != lane_map_t::KIND_ROAD) return;  // intersections are assembled here from the roads
+    try {
+      state_.setRoadLanes(msg->id, fromMessage(*msg, state_.skeleton()));
+      process_.counters().set("roads_shown", static_cast<int64_t>(state_.mappedRoadCount()));
+      process_.latency().add(static_cast<double>(nowUtime() - rbuf->recv_utime) * 1e-3);
+    } catch (const std::exception& e) {
+      process_.counters().add("lane_maps_failed");
+      std::cerr << "viewer: LANE_MAP of road " << msg->id << ": " << e.what() << "\n";
+    }
+  }
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&, const status_t* msg) {
+    state_.onStatus(fromMessage(*msg), monotonicSeconds());
+  }
+
+  Process& process_;
+  viewer::ViewerState& state_;
+};
+
+// A finished map store: every road's lanes (<store>/lanes/road_<id>.osm), the BEV grid written
+// last (<store>/bev/road_<id>.bev); the car's trail, the
+// roads driven and the last STATUS of each process from <store>/graph.lcmlog when the run
+// recorded one (read as a file: no LCM bus).
+inline void loadStore(const std::string& store, viewer::ViewerState& state) {
+  const fs::path lanes = fs::path(store) / "lanes";
+  if (!fs::is_directory(lanes)) throw std::runtime_error("no map store at " + store + " (no lanes/ folder)");
+  const auto& o = state.skeleton().frame().origin();
+  io::Lanelet2ReadOptions ro;
+  ro.origin_alt = o.alt;
+  int loaded = 0;
+  for (const auto& [id, path] : bev::roadFiles(lanes.string(), ".osm")) {
+    try {
+      map::LaneMap m = io::readLanelet2(path, o.lat, o.lon, ro);
+      for (auto& ll : m.lanelets) ll.road_id = id;
+      state.onRoadClosed(id);
+      state.setRoadLanes(id, std::move(m));
+      ++loaded;
+    } catch (const std::exception& e) {
+      std::cerr << "viewer: skipping " << path << ": " << e.what() << "\n";
+    }
+  }
+  std::cerr << "viewer: " << loaded << " mapped roads from " << lanes << "\n";
+  // The BEV layer: the grid written last (<store>/bev/road_<id>.bev).
+  fs::path newest;
+  int64_t newest_id = -1;
+  for (const auto& [id, path] : bev::roadFiles((fs::path(store) / "bev").string(), ".bev")) {
+    if (newest.empty() || fs::last_write_time(path) > fs::last_write_time(newest)) {
+      newest = path;
+      newest_id = id;
+    }
+  }
+  if (!newest.empty()) {
+    try {
+      state.setBev(newest_id, bev::BevGrid::load(newest.string()));
+    } catch (const std::exception& e) {
+      std::cerr << "viewer: skipping " << newest << ": " << e.what() << "\n";
+    }
+  }
+  const fs::path log = fs::path(store) / "graph.lcmlog";
+  if (!fs::exists(log)) return;
+  lcm::LogFile file(log.string(), "r");
+  if (!file.good()) return;
+  int poses = 0;
+  while (const lcm::LogEvent* ev = file.readNextEvent()) {
+    if (ev->channel == channels::kPose) {
+      pose_t p;
+      if (p.decode(ev->data, 0, ev->datalen) < 0) continue;
+      const EnuPose e = toEnuPose(p, state.skeleton().frame());
+      if (e.valid) {
+        state.onPose(p.utime, p.latitude, p.longitude, e.heading);
+        ++poses;
+      }
+    } else if (ev->channel == channels::kRoadEvent) {
+      road_event_t r;
+      if (r.decode(ev->data, 0, ev->datalen) < 0) continue;
+      if (r.type == road_event_t::TYPE_ENTERED_ROAD || r.type == road_event_t::TYPE_REACHED_INTERSECTION) state.onRoadClosed(r.road_id);
+    } else if (ev->channel == channels::kStatus) {
+      status_t s;
+      if (s.decode(ev->data, 0, ev->datalen) < 0) continue;
+      state.onStatus(fromMessage(s), monotonicSeconds());
+    }
+  }
+  std::cerr << "viewer: " << poses << " poses from " << log << "\n";
+}
+
+inline viewer::HttpResponse text(int status, std::string body) {
+  viewer::HttpResponse r;
+  r.status = status;
+  r.body = std::move(body);
+  return r;
+}
+
+inline viewer::HttpResponse json(std::string body) {
+  viewer::HttpResponse r;
+  r.content_type = "application/json";
+  r.body = std::move(body);
+  r.headers.emplace_back("Cache-Control", "no-store");
+  return r;
+}
+
+inline int64_t queryInt(const std::string& query, const std::string& key, int64_t fallback) {
+  const std::regex re("(^|&)" + key + "=(-?[0-9]{1,18})(&|$)");
+  std::smatch m;
+  if (std::regex_search(query, m, re)) return std::stoll(m[2]);
+  return fallback;
+}
+
+inline viewer::HttpHandler makeHandler(viewer::ViewerState& state, std::map<std::string, viewer::StaticAsset> assets, Counters& counters) {
+  return [&state, &counters, assets = std::move(assets)](const viewer::HttpRequest& req) -> viewer::HttpResponse {
+    counters.add("http_requests");
+    const std::string& p = req.path;
+    if (p == "/api/state") return json(state.stateJson(monotonicSeconds()));
+    if (p == "/api/events") {
+      viewer::HttpResponse r;
+      r.event_stream = true;
+      return r;
+    }
+    if (p == "/api/skeleton.geojson") return json(state.skeletonGeoJson());
+    if (p == "/api/lanes.geojson") return json(state.lanesGeoJson());
+    if (p == "/api/trail") return json(state.trail(queryInt(req.query, "from", 0)).dump());
+    if (p == "/api/bev.png") {
+      std::string png = state.bevPng();
+      if (png.empty()) return text(404, "no BEV yet\n");
+      viewer::HttpResponse r;
+      r.content_type = "image/png";
+      r.body = std::move(png);
+      r.headers.emplace_back("Cache-Control", "no-store");
+      return r;
+    }
+    if (p == "/download/lane_map.osm") {
+      std::string xml = state.lanelet2Xml();
+      if (xml.empty()) return text(404, "nothing mapped yet\n");
+      viewer::HttpResponse r;
+      r.content_type = "application/xml";
+      r.body = std::move(xml);
+      r.headers.emplace_back("Content-Disposition", "attachment; filename=\"lane_map.osm\"");
+      return r;
+    }
+    if (p == "/download/lane_map.geojson") {
+      viewer::HttpResponse r = json(state.lanesGeoJson());
+      r.content_type = "application/geo+json";
+      r.headers.emplace_back("Content-Disposition", "attachment; filename=\"lane_map.geojson\"");
+      return r;
+    }
+    auto it = assets.find(p == "/" ? "/index.html" : p);
+    if (it == assets.end()) return text(404, "not found\n");
+    viewer::HttpResponse r;
+    r.content_type = it->second.content_type;
+    r.body = it->second.body;
+    return r;
+  };
+}
+
+// build/bin/lanemap-viewer -> build/share/lanemap/viewer (where CMake puts the page).
+inline std::string defaultAssets() {
+  char exe[4096] = {0};
+  const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+  if (n <= 0) return "";
+  return (fs::path(exe).parent_path().parent_path() / "share" / "lanemap" / "viewer").string();
+}
+
+}  // namespace lanemap::viewer_app

@@ -25,6 +25,7 @@
 #include "lanemap/bev_road_t.hpp"
 #include "lanemap/lane_map_t.hpp"
 #include "processes/framework/channels.h"
+#include "processes/framework/lane_map_message.h"
 #include "processes/framework/process.h"
 #include "processes/framework/process_configs.h"
 #include <algorithm>
@@ -44,30 +45,6 @@ namespace lanemap::lane_mapper_app {
 
 namespace fs = std::filesystem;
 using namespace lanemap;
-
-inline int8_t polylineType(map::LineType t) {
-  switch (t) {
-    case map::LineType::kDashed: return polyline_t::TYPE_DASHED;
-    case map::LineType::kSolid:
-    case map::LineType::kSolidSolid: return polyline_t::TYPE_SOLID;
-    case map::LineType::kCurb: return polyline_t::TYPE_CURB;
-    case map::LineType::kVirtual: return polyline_t::TYPE_VIRTUAL;
-    case map::LineType::kStopLine: return polyline_t::TYPE_STOP_LINE;
-  }
-  return polyline_t::TYPE_UNKNOWN;
-}
-
-inline polyline_t toPolyline(const std::vector<Eigen::Vector3d>& pts, int8_t type) {
-  polyline_t p;
-  p.num_points = static_cast<int32_t>(pts.size());
-  for (const auto& q : pts) {
-    p.east.push_back(q.x());
-    p.north.push_back(q.y());
-    p.up.push_back(q.z());
-  }
-  p.type = type;
-  return p;
-}
 
 class LaneMapperApp {
  public:
@@ -205,28 +182,7 @@ class LaneMapperApp {
   }
 
   void publish(int64_t road_id, const map::LaneMap& m, int64_t utime) {
-    lane_map_t msg;
-    msg.utime = utime;
-    msg.kind = lane_map_t::KIND_ROAD;
-    msg.id = road_id;
-    msg.origin_latitude = m.origin_lat;
-    msg.origin_longitude = m.origin_lon;
-    msg.origin_altitude = m.origin_alt;
-    for (const auto& ll : m.lanelets) {
-      lane_t lane;
-      lane.lane_id = ll.id;
-      lane.index_from_left = ll.index_from_left;
-      lane.centre = toPolyline(ll.centre, polyline_t::TYPE_VIRTUAL);
-      const map::LineString* l = m.line(ll.left_id);
-      const map::LineString* r = m.line(ll.right_id);
-      lane.left_boundary = l ? toPolyline(l->points, polylineType(l->type)) : toPolyline({}, polyline_t::TYPE_UNKNOWN);
-      lane.right_boundary = r ? toPolyline(r->points, polylineType(r->type)) : toPolyline({}, polyline_t::TYPE_UNKNOWN);
-      lane.successors = ll.successors;
-      lane.num_successors = static_cast<int32_t>(ll.successors.size());
-      msg.lanes.push_back(std::move(lane));
-    }
-    msg.num_lanes = static_cast<int32_t>(msg.lanes.size());
-    msg.map_path = wholeMapFile();
+    const lane_map_t msg = toMessage(road_id, m, utime, wholeMapFile());
     std::lock_guard<std::mutex> lock(publish_mutex_);
     process_.lcm().publish(channels::kLaneMap, &msg);
     process_.counters().add("lane_maps_published");

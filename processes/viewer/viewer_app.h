@@ -30,6 +30,7 @@
 #include "lanemap/road_event_t.hpp"
 #include "lanemap/status_t.hpp"
 #include "processes/framework/channels.h"
+#include "processes/framework/lane_map_message.h"
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
 #include "processes/framework/process_configs.h"
@@ -54,60 +55,6 @@ using namespace lanemap;
 
 inline double monotonicSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-inline map::LineType lineType(int8_t t) {
-  switch (t) {
-    case polyline_t::TYPE_DASHED: return map::LineType::kDashed;
-    case polyline_t::TYPE_SOLID: return map::LineType::kSolid;
-    case polyline_t::TYPE_CURB: return map::LineType::kCurb;
-    case polyline_t::TYPE_STOP_LINE: return map::LineType::kStopLine;
-    default: return map::LineType::kVirtual;
-  }
-}
-
-inline std::vector<Eigen::Vector3d> points(const polyline_t& p) {
-  std::vector<Eigen::Vector3d> out;
-  const size_t n = std::min({static_cast<size_t>(std::max(0, p.num_points)), p.east.size(), p.north.size(), p.up.size()});
-  for (size_t i = 0; i < n; ++i) out.emplace_back(p.east[i], p.north[i], p.up[i]);
-  return out;
-}
-
-// LANE_MAP (one road's lanes) as a LaneMap: one lanelet per lane, its two boundaries as line
-// strings of their own, with ids clear of the lane mapper's road ids ((road + 1) * 100000 + n) and
-// of the intersections' (config/intersections.yaml id_base: 1e12 + 100000 * intersection).
-inline map::LaneMap fromMessage(const lane_map_t& msg, const skeleton::Skeleton& sk) {
-  map::LaneMap m;
-  m.origin_lat = msg.origin_latitude;
-  m.origin_lon = msg.origin_longitude;
-  m.origin_alt = msg.origin_altitude;
-  const skeleton::AtomicRoad* road = sk.road(msg.id);
-  int64_t next_line = 5'000'000'000'000LL + std::max<int64_t>(0, msg.id) * 100'000;
-  for (const auto& lane : msg.lanes) {
-    map::Lanelet ll;
-    ll.id = lane.lane_id;
-    ll.kind = map::LaneletKind::kRoad;
-    ll.road_id = msg.id;
-    if (road) {
-      ll.from_node = road->from;
-      ll.to_node = road->to;
-    }
-    ll.index_from_left = lane.index_from_left;
-    ll.centre = points(lane.centre);
-    ll.successors = lane.successors;
-    for (const polyline_t* b : {&lane.left_boundary, &lane.right_boundary}) {
-      auto pts = points(*b);
-      if (pts.size() < 2) continue;
-      map::LineString ls;
-      ls.id = next_line++;
-      ls.type = lineType(b->type);
-      ls.points = std::move(pts);
-      (b == &lane.left_boundary ? ll.left_id : ll.right_id) = ls.id;
-      m.lines.push_back(std::move(ls));
-    }
-    m.lanelets.push_back(std::move(ll));
-  }
-  return m;
 }
 
 inline viewer::ProcessStatus fromMessage(const status_t& s) {

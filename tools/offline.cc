@@ -226,7 +226,7 @@ class OfflineMapper {
       const bev::BevGrid* grid = &it->second;
       if (const auto prior = prior_.find(road.road_id); prior != prior_.end()) {  // driven in an earlier drive
         bev::BevGrid fused = prior->second;
-        const bev::Alignment a = bev::mergeAligned(it->second, fused, traversals_[road.road_id], !o_.no_align);
+        const bev::Alignment a = bev::mergeAligned(it->second, fused, !o_.no_align);
         drive_log_.push_back({{"road_id", road.road_id}, {"traversals_before", traversals_[road.road_id]},
                               {"aligned", a.ok}, {"shift_m", {a.shift_m.x(), a.shift_m.y()}},
                               {"correlation", a.correlation}, {"overlap_cells", a.overlap_cells}, {"why", a.why}});

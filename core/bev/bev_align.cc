@@ -134,9 +134,9 @@ BevGrid shiftedGrid(const BevGrid& grid, const Eigen::Vector2i& shift) {
   return out;
 }
 
-Alignment mergeAligned(const BevGrid& traversal, BevGrid& fused, int traversals_fused, bool align, const AlignOptions& o) {
+Alignment mergeAligned(const BevGrid& traversal, BevGrid& fused, bool align, const AlignOptions& o) {
   Alignment a;
-  if (traversals_fused <= 0 || fused.tileCount() == 0) {
+  if (fused.tileCount() == 0) {
     mergeGrid(traversal, fused);
     a.why = "the first traversal";
     return a;
@@ -147,10 +147,11 @@ Alignment mergeAligned(const BevGrid& traversal, BevGrid& fused, int traversals_
     mergeGrid(traversal, fused);
     return a;
   }
-  // Both onto the mean of all traversals: fused by -s/(k+1), the new one by s - s/(k+1).
-  const double k1 = traversals_fused + 1.0;
-  const Eigen::Vector2i fused_move(static_cast<int>(std::lround(-a.shift_cells.x() / k1)),
-                                   static_cast<int>(std::lround(-a.shift_cells.y() / k1)));
+  // Both onto the frame-weighted mean: fused by -s m/(n+m), the traversal by s - s m/(n+m).
+  const double n = std::max(1, fused.frames()), m = std::max(1, traversal.frames());
+  const double w = m / (n + m);
+  const Eigen::Vector2i fused_move(static_cast<int>(std::lround(-a.shift_cells.x() * w)),
+                                   static_cast<int>(std::lround(-a.shift_cells.y() * w)));
   const Eigen::Vector2i traversal_move = a.shift_cells + fused_move;
   if (fused_move != Eigen::Vector2i::Zero()) fused = shiftedGrid(fused, fused_move);
   mergeGrid(traversal_move == Eigen::Vector2i::Zero() ? traversal : shiftedGrid(traversal, traversal_move), fused);

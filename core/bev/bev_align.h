@@ -15,10 +15,12 @@
 // what the lines pin.
 //
 // No drive is special: the fused grid stands for the mean of the traversals merged so far (their
-// common estimate), not for the first one. With k traversals fused and the new one measured s cells
-// away from them, the fused grid moves by -s/(k+1) and the new traversal by s*k/(k+1), so both land
-// on the mean of all k+1 (rounded to whole cells). Rotation is not estimated (a heading bias of
-// 0.05 degrees moves a line 9 cm over 100 m).
+// common estimate), each weighted by its frames (the evidence it brought), not for the first one.
+// With n frames fused and a traversal of m frames measured s cells away from them, the fused grid
+// moves by -s m/(n+m) and the traversal by s n/(n+m), so both land on the weighted mean of all
+// (rounded to whole cells); n and m are the grids' frame counts, so a store needs no record beside
+// its grids. Rotation is not estimated (a heading bias of 0.05 degrees moves a line 9 cm over
+// 100 m).
 #pragma once
 
 #include "core/bev/bev_grid.h"
@@ -56,11 +58,9 @@ Alignment estimateShift(const BevGrid& reference, const BevGrid& traversal, cons
 // `grid` with every count moved by `shift` cells (frames kept).
 BevGrid shiftedGrid(const BevGrid& grid, const Eigen::Vector2i& shift);
 
-// Merges `traversal` into `fused`, which holds `traversals_fused` traversals already (0: fused is
-// empty and becomes the traversal). With `align`, the traversal is registered first and both are
-// moved onto the mean of all traversals (see above). Returns the alignment measured (!ok when
-// not aligned, with why).
-Alignment mergeAligned(const BevGrid& traversal, BevGrid& fused, int traversals_fused, bool align,
-                       const AlignOptions& options = {});
+// Merges `traversal` into `fused` (an empty fused grid becomes the traversal). With `align`, the
+// traversal is registered first and both are moved onto the frame-weighted mean (see above).
+// Returns the alignment measured (!ok when not aligned, with why).
+Alignment mergeAligned(const BevGrid& traversal, BevGrid& fused, bool align, const AlignOptions& options = {});
 
 }  // namespace lanemap::bev

@@ -53,14 +53,15 @@ std::map<int64_t, std::string> roadFiles(const std::string& dir, const std::stri
   return out;
 }
 
-StoredRoad storeRoad(const std::string& store, const RoadBev& road) {
+StoredRoad storeRoad(const std::string& store, const RoadBev& road, bool align) {
   StoredRoad s;
   s.path = roadGridPath(store, road.road_id);
   io::createDirectories(std::filesystem::path(s.path).parent_path().string());
   BevGrid grid = road.grid;
   if (std::filesystem::exists(s.path)) {
-    const BevGrid old = BevGrid::load(s.path);
-    mergeGrid(old, grid);
+    grid = BevGrid::load(s.path);
+    s.alignment = mergeAligned(road.grid, grid, align);
+    s.merged = true;
   }
   grid.save(s.path);
   const auto box = grid.cellBounds();
@@ -163,11 +164,13 @@ std::vector<Checkpoint> loadCheckpoints(const std::string& store, std::vector<st
       c.road_id = road_id;
       c.path = path;
       c.grid = BevGrid::load(c.path);
+      bool matched = false;
       std::ifstream meta(checkpointMeta(store, c.road_id));
       if (meta) {
         const auto j = nlohmann::json::parse(meta, nullptr, false);
         if (j.is_object() && j.value("road_id", int64_t{-1}) == c.road_id &&
             j.value("grid_hash", std::string()) == std::to_string(gridHash(c.grid))) {
+          matched = true;
           c.last_frame_utime = j.value("last_frame_utime", int64_t{0});
           const int64_t stored_then = j.value("stored_frames", int64_t{-1});
           const int64_t stored_now = storedFrames(roadGridPath(store, road_id));
@@ -177,8 +180,16 @@ std::vector<Checkpoint> loadCheckpoints(const std::string& store, std::vector<st
             continue;
           }
         }
-        // Else the JSON is of an older checkpoint (a crash between the grid and its JSON): the
-        // grid is newer than anything stored, its newest frame unknown (0).
+      }
+      if (!matched) {
+        // No JSON, or one of an older checkpoint (a crash between the grid and its JSON): the grid
+        // is newer than anything stored, its newest frame unknown (0). Its JSON is written now, so
+        // that a crash after this road is stored and before the checkpoint is removed is still
+        // recognised (else the next start would carry the stored frames on a second time).
+        const nlohmann::json fixed{{"road_id", road_id}, {"last_frame_utime", 0}, {"frames", c.grid.frames()},
+                                   {"grid_hash", std::to_string(gridHash(c.grid))},
+                                   {"stored_frames", storedFrames(roadGridPath(store, road_id))}};
+        io::writeFileAtomically(checkpointMeta(store, road_id).string(), fixed.dump() + "\n");
       }
       out.push_back(std::move(c));
     } catch (const std::exception& e) {

@@ -1,7 +1,8 @@
 // The map store's BEV part: a closed road's grid goes to <store>/bev/road_<id>.bev (BevGrid::save,
 // written atomically), so a crash loses nothing and the lane mapper reads it when BEV_ROAD says so.
 // A road driven again is merged into its stored grid (counts add up, frames too): more passes,
-// more evidence.
+// more evidence; the new pass is aligned to the stored evidence first (core/bev/bev_align.h), as
+// another drive's poses carry another offset.
 //
 // Checkpoints (crash recovery): the grid of a road still being driven goes to
 // <store>/bev/open/road_<id>.bev every few seconds (lanemap-bev-builder, `checkpoint` in its
@@ -12,6 +13,7 @@
 // loadCheckpoints sorts out a pair caught between two steps (see storeCheckpoint).
 #pragma once
 
+#include "core/bev/bev_align.h"
 #include "core/bev/bev_grid.h"
 #include "core/bev/road_bev.h"
 
@@ -32,14 +34,18 @@ struct StoredRoad {
   double resolution = 0.0;
   int width = 0, height = 0;  // cells (BevGrid::cellBounds())
   int frames = 0;
+  bool merged = false;   // the road was stored before: this traversal was merged into it
+  Alignment alignment;   // the merge's (bev_align.h); !ok: merged unshifted, alignment.why says why
 };
 
 std::string roadGridPath(const std::string& store, int64_t road_id);
 // The files road_<id><extension> of a folder of the map store (bev/, bev/open/, lanes/), by road
 // id; none when the folder is missing. Other names are ignored.
 std::map<int64_t, std::string> roadFiles(const std::string& dir, const std::string& extension);
-// Writes (or merges into) the road's file; throws BevError / std::runtime_error on failure.
-StoredRoad storeRoad(const std::string& store, const RoadBev& road);
+// Writes (or merges into) the road's file; throws BevError / std::runtime_error on failure. A road
+// already stored gets the new traversal aligned to it first (bev::mergeAligned: both onto the
+// frame-weighted mean), unless `align` is false.
+StoredRoad storeRoad(const std::string& store, const RoadBev& road, bool align = true);
 
 struct Checkpoint {
   int64_t road_id = -1;

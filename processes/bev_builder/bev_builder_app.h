@@ -41,6 +41,7 @@
 #include "processes/framework/process_configs.h"
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <iterator>
@@ -258,6 +259,13 @@ class BevBuilderApp {
         bev::removeCheckpoint(store_, road.road_id);  // after the road is stored: a crash between keeps both
         checkpointed_.erase(road.road_id);
         process_.counters().add("roads_written");
+        if (stored.merged) {  // driven before: merged onto the stored evidence, aligned when it could be
+          process_.counters().add(stored.alignment.ok ? "roads_merged_aligned" : "roads_merged_unaligned");
+          const auto cm = static_cast<int64_t>(std::lround(stored.alignment.shift_m.norm() * 100));
+          if (stored.alignment.ok) process_.counters().set("align_shift_cm_max", std::max(process_.counters().get("align_shift_cm_max"), cm));
+          std::cerr << "bev_builder: road " << road.road_id << " merged onto its stored BEV, "
+                    << (stored.alignment.ok ? "shifted " + std::to_string(cm) + " cm" : "unaligned: " + stored.alignment.why) << "\n";
+        }
       } catch (const std::exception& e) {
         std::cerr << "bev_builder: road " << road.road_id << ": " << e.what() << "\n";
         process_.counters().add("roads_write_failed");

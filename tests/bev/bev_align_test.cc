@@ -2,6 +2,8 @@
 // traversals whose poses carry known offsets.
 #include "core/bev/bev_align.h"
 
+#include "tests/bev/synthetic_road.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,54 +12,8 @@
 namespace lanemap::bev {
 namespace {
 
-// A 60 m road along east: curbs at north -1.0 and 8.0 m, solid lines at 0 and 7 m, a dashed line
-// (3 m dash, 6 m gap) at 3.5 m; observed over north -3..10 m. The traversal's evidence lands
-// `offset` away from the truth (its pose error); each line cell is seen with probability 0.8, and
-// 2 % of the other cells are false line hits. `lines` false: no line at all (a featureless road).
-BevGrid traversal(const Eigen::Vector2d& offset, uint32_t seed, bool lines = true, double x0 = 0, double x1 = 60) {
-  BevGrid g;
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0, 1);
-  const double res = g.resolution();
-  for (double x = x0; x < x1; x += res) {
-    for (double y = -3.0; y < 10.0; y += res) {
-      const double xc = x + res / 2, yc = y + res / 2;
-      const auto cell = g.cellOf(Eigen::Vector2d(xc, yc) + offset);
-      const int frames = 3;
-      g.add(cell, Layer::kObserved, frames);
-      if (yc > 0 && yc < 7) g.add(cell, Layer::kDrivable, frames);
-      auto near = [&](double at) { return std::abs(yc - at) < 0.075; };
-      Layer line = Layer::kCount;
-      if (lines && (near(-1.0) || near(8.0))) line = Layer::kCurb;
-      if (lines && (near(0.0) || near(7.0))) line = Layer::kSolidLine;
-      if (lines && near(3.5) && std::fmod(xc, 9.0) < 3.0) line = Layer::kDashedLine;
-      for (int f = 0; f < frames; ++f) {
-        if (line != Layer::kCount && u(rng) < 0.8) g.add(cell, line);
-        if (line == Layer::kCount && u(rng) < 0.02) g.add(cell, Layer::kLaneSeparation);
-      }
-    }
-  }
-  for (int f = 0; f < 30; ++f) g.addFrame();
-  return g;
-}
-
-// Where the solid line at north 0 is in `g`, and how spread its evidence is (metres): the mean
-// and standard deviation of north over the cells of north -0.8..0.8 weighted by solid-line counts.
-std::pair<double, double> solidLine(const BevGrid& g) {
-  double w = 0, m = 0, m2 = 0;
-  for (double x = 10; x < 50; x += g.resolution()) {
-    for (double y = -0.8; y < 0.8; y += g.resolution()) {
-      const auto cell = g.cellOf(Eigen::Vector2d(x, y));
-      const double n = g.count(cell, Layer::kSolidLine);
-      const double yc = g.cellCentre(cell).y();
-      w += n;
-      m += n * yc;
-      m2 += n * yc * yc;
-    }
-  }
-  const double mean = m / w;
-  return {mean, std::sqrt(std::max(0.0, m2 / w - mean * mean))};
-}
+using testing::solidLine;
+using testing::traversal;
 
 TEST(BevAlign, FindsTheOffsetBetweenTwoTraversals) {
   const BevGrid ref = traversal({0.0, 0.0}, 1);
@@ -101,8 +57,8 @@ TEST(BevAlign, TraversalsFuseOnTheirMeanAndTheLinesStaySharp) {
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();
   for (size_t i = 0; i < offsets.size(); ++i) {
     const BevGrid t = traversal(offsets[i], 10 + static_cast<uint32_t>(i));
-    const Alignment a = mergeAligned(t, aligned, static_cast<int>(i), true);
-    mergeAligned(t, blurred, static_cast<int>(i), false);
+    const Alignment a = mergeAligned(t, aligned, true);  // every traversal has 30 frames: equal weights
+    mergeAligned(t, blurred, false);
     if (i > 0) {
       EXPECT_TRUE(a.ok) << i << ": " << a.why;
     }
@@ -120,10 +76,19 @@ TEST(BevAlign, TraversalsFuseOnTheirMeanAndTheLinesStaySharp) {
   EXPECT_GT(spread_blurred, 2.5 * spread_aligned);
 }
 
+TEST(BevAlign, ATraversalWeighsByItsFrames) {
+  BevGrid fused = traversal({0.0, 0.0}, 20);                                   // 30 frames at 0
+  const Alignment a = mergeAligned(traversal({0.0, 0.8}, 21, true, 0, 60, 90), fused, true);  // 90 at +0.8 m
+  ASSERT_TRUE(a.ok) << a.why;
+  EXPECT_NEAR(a.shift_m.y(), -0.8, 0.101);
+  EXPECT_EQ(fused.frames(), 120);
+  EXPECT_NEAR(solidLine(fused).first, 0.6, 0.11);  // (30 x 0 + 90 x 0.8) / 120
+}
+
 TEST(BevAlign, TheFirstTraversalIsTakenAsItIs) {
   BevGrid fused;
   const BevGrid t = traversal({0.7, 0.7}, 5);
-  const Alignment a = mergeAligned(t, fused, 0, true);
+  const Alignment a = mergeAligned(t, fused, true);
   EXPECT_FALSE(a.ok);
   EXPECT_EQ(fused.frames(), t.frames());
   EXPECT_NEAR(solidLine(fused).first, 0.7, 0.051);

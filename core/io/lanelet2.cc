@@ -800,6 +800,11 @@ std::string autowareProjectorInfo(const LaneMap& map) {
          "  altitude: " + formatDouble("%.4f", map.origin_alt) + "\n";
 }
 
+namespace {
+std::string readAll(const std::string& path);        // below
+std::string sidecarHashOf(const std::string& path);  // below
+}  // namespace
+
 void writeLanelet2(const LaneMap& map, const std::string& path, const Lanelet2WriteOptions& options) {
   const Lanelet2Document doc = toLanelet2Document(map, options, path);
   // The map and its sidecar are two files; each is written atomically, and the pair moves from the
@@ -811,6 +816,13 @@ void writeLanelet2(const LaneMap& map, const std::string& path, const Lanelet2Wr
   const std::string sidecar = lanelet2SidecarPath(path);
   const std::string next = sidecar.substr(0, sidecar.size() - std::string(".lanemap.json").size()) + ".next.lanemap.json";
   if (options.write_sidecar) {
+    // A write killed after the map's rename left the map's sidecar as MAP.next: put it in place
+    // before MAP.next is reused, or the map on disk would lose its sidecar if this write is killed.
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(next, ec) && std::filesystem::is_regular_file(path, ec) &&
+        sidecarHashOf(next) == hex64(fnv1a64(readAll(path)))) {
+      renameFileDurably(next, sidecar);
+    }
     writeFileAtomically(next, doc.sidecar);
     try {
       writeFileAtomically(path, doc.osm);

@@ -207,8 +207,11 @@ std::shared_ptr<const Tile> SimWorld::Impl::buildTile(int64_t ix, int64_t iy) co
   if (options.flat) {
     tile->height = cv::Mat(2, 2, CV_32F, cv::Scalar(0.0f));
     tile->hn = 1;
-    return tile;
   }
+  tile->hres = size / tile->hn;
+  int exponent = 0;
+  if (std::frexp(tile->hres, &exponent) == 0.5) tile->inv_hres = std::ldexp(1.0, 1 - exponent);
+  if (options.flat) return tile;
   const int hn = tile->hn;
   const double hres = size / hn;
   cv::Mat profile(hn + 1, hn + 1, CV_32F, cv::Scalar(0.0f));
@@ -371,9 +374,9 @@ SimWorld::~SimWorld() = default;
 double SimWorld::height(double east, double north) const {
   if (impl_->options.flat) return 0.0;
   const Tile& t = impl_->tileAt(east, north);
-  const double hres = impl_->options.tile_size_m / t.hn;
-  const double gx = std::clamp((east - t.x0) / hres, 0.0, static_cast<double>(t.hn));
-  const double gy = std::clamp((north - t.y0) / hres, 0.0, static_cast<double>(t.hn));
+  const double hn = static_cast<double>(t.hn);
+  const double gx = std::clamp(t.inv_hres > 0.0 ? (east - t.x0) * t.inv_hres : (east - t.x0) / t.hres, 0.0, hn);
+  const double gy = std::clamp(t.inv_hres > 0.0 ? (north - t.y0) * t.inv_hres : (north - t.y0) / t.hres, 0.0, hn);
   const int c = std::min(static_cast<int>(gx), t.hn - 1);
   const int r = std::min(static_cast<int>(gy), t.hn - 1);
   const double u = gx - c, v = gy - r;

@@ -35,6 +35,8 @@
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
+#include <opencv2/core/utility.hpp>
+
 #include <unistd.h>
 
 #include <chrono>
@@ -44,6 +46,7 @@
 #include <optional>
 #include <iostream>
 #include <sstream>
+#include <thread>
 
 namespace fs = std::filesystem;
 using namespace lanemap;
@@ -149,6 +152,7 @@ int main(int argc, char** argv) {
   std::optional<uint64_t> world_seed;
   double duration = 120.0, camera_hz = 10.0, pose_hz = 100.0;
   bool no_lidar = false, flat = false, keep_lane_tags = false, force = false, quiet = false;
+  int threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   auto* osm_opt = app.add_option("--osm", osm_path, "road network (.osm or .osm.pbf)");
   auto* l2_opt = app.add_option("--lanelet2", lanelet2_path,
                                 "a Lanelet2 HD map (.osm) to build the world from, instead of --osm");
@@ -175,6 +179,10 @@ int main(int argc, char** argv) {
   app.add_option("--map-config", map_path,
                  "the map block whose skeleton options cut the atomic roads (the mapper's, so that "
                  "scenario.json's road ids are the map's)")->capture_default_str();
+  app.add_option("--threads", threads,
+                 "threads rendering camera frames and casting LIDAR sweeps (default: the cores, here " +
+                     std::to_string(threads) + "); the output is byte-identical for any count")
+      ->check(CLI::Range(1, 256));
   app.add_flag("--force", force, "replace a non-empty --out");
   app.add_flag("-q,--quiet", quiet, "no progress");
   CLI11_PARSE(app, argc, argv);
@@ -294,6 +302,7 @@ int main(int argc, char** argv) {
     sim_options.seed = seed;
     sim_options.camera_rate_hz = camera_hz;
     sim_options.pose_rate_hz = pose_hz;
+    sim_options.threads = threads;
     sim_options.lidar = !no_lidar;
     if (vehicle["camera"]["jpeg_quality"]) sim_options.jpeg_quality = vehicle["camera"]["jpeg_quality"].as<int>();
     sim_options.pose_noise = sim::PoseNoiseOptions::fromYaml(drive_config["pose_noise"]);
@@ -309,6 +318,9 @@ int main(int argc, char** argv) {
       const map::Lanelet* lb = w->lanelet(b);
       return la && lb && la->from_node == lb->to_node && la->to_node == lb->from_node;
     };
+    // Whole frames and sweeps go to the --threads workers; OpenCV's own row split inside a frame
+    // would only add threads to them (and use more than one core with --threads 1).
+    cv::setNumThreads(1);
     sim::Simulator simulator(*world, trajectory, sk.frame(), camera, render, lidar, sim_options);
     sim::SimulatorCounts counts;
     {

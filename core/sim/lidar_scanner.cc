@@ -132,6 +132,10 @@ double LidarScanner::azimuthStepDeg() const {
 }
 
 LidarSweep LidarScanner::scan(const World& world, double t0, const PoseAtTime& pose_at, uint64_t seed) {
+  return encode(cast(world, t0, pose_at, seed));
+}
+
+LidarScanner::Cast LidarScanner::cast(const World& world, double t0, const PoseAtTime& pose_at, uint64_t seed) const {
   const int n = sequences_per_sweep_;
   const double seq_s = lidar::kVlp16SequenceUs * 1e-6, firing_s = lidar::kVlp16FiringUs * 1e-6;
   const double deg_per_s = options_.rpm * 6.0;
@@ -202,15 +206,25 @@ LidarSweep LidarScanner::scan(const World& world, double t0, const PoseAtTime& p
     }
   });
 
-  LidarSweep sweep;
-  sweep.t0 = t0;
-  sweep.t_end = t0 + n * seq_s;
-  sweep.returns.reserve(static_cast<size_t>(n) * lidar::kVlp16Lasers);
+  Cast out;
+  out.t0 = t0;
+  out.returns.reserve(static_cast<size_t>(n) * lidar::kVlp16Lasers);
   for (int i = 0; i < n; ++i) {
-    encoder_.add(sequences[i], usecPastHour(t0 + i * seq_s));
     for (int j = 0; j < lidar::kVlp16Lasers; ++j)
-      if (valid[i][j]) sweep.returns.push_back(rays[i][j]);
+      if (valid[i][j]) out.returns.push_back(rays[i][j]);
   }
+  out.sequences = std::move(sequences);
+  return out;
+}
+
+LidarSweep LidarScanner::encode(Cast&& cast) {
+  const double seq_s = lidar::kVlp16SequenceUs * 1e-6;
+  const int n = static_cast<int>(cast.sequences.size());
+  LidarSweep sweep;
+  sweep.t0 = cast.t0;
+  sweep.t_end = cast.t0 + n * seq_s;
+  for (int i = 0; i < n; ++i) encoder_.add(cast.sequences[i], usecPastHour(cast.t0 + i * seq_s));
+  sweep.returns = std::move(cast.returns);
   sweep.packets = encoder_.takePackets();
   return sweep;
 }

@@ -92,6 +92,18 @@ class LidarScanner {
   // sensor), so a sweep returns 75 or 76 packets at 600 rpm.
   LidarSweep scan(const World& world, double t0, const PoseAtTime& pose_at, uint64_t seed);
 
+  // scan() in two halves, for sweeps cast on several threads at once: cast() is the ray casting
+  // (const: any number may run at a time; `pose_at` is called from the calling thread only),
+  // encode() the packet encoder, which must see the sweeps in time order.
+  // scan(w, t0, p, s) == encode(cast(w, t0, p, s)).
+  struct Cast {
+    double t0 = 0.0;
+    std::vector<lidar::FiringSequence> sequences;
+    std::vector<LidarReturn> returns;
+  };
+  Cast cast(const World& world, double t0, const PoseAtTime& pose_at, uint64_t seed) const;
+  LidarSweep encode(Cast&& cast);
+
   int sequencesPerSweep() const { return sequences_per_sweep_; }
   double sweepPeriodS() const { return 60.0 / options_.rpm; }
   double azimuthStepDeg() const;    // azimuth advance per firing sequence

@@ -47,10 +47,24 @@ double refineCrossing(const GroundGap& gap, double a, double fa, double b, doubl
   return c;
 }
 
+double marchGround(const World& world, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                   double max_range, const RaycastOptions& opt, double give_up_after);
+
 }  // namespace
 
 double raycastGround(const World& world, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
                      double max_range, const RaycastOptions& opt) {
+  return marchGround(world, o, d, max_range, opt, kInf);
+}
+
+namespace {
+
+// The ground march of raycastGround, which may give up early: once the ray is known to be above
+// the ground beyond `give_up_after` it returns +infinity (the crossing, if any, is farther). The
+// march visits the same points whatever `give_up_after` is, so a crossing it does return is the
+// one raycastGround returns, to the bit.
+double marchGround(const World& world, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                   double max_range, const RaycastOptions& opt, double give_up_after) {
   const GroundGap gap{world, o, d};
   double t = 0.0;
   double f = gap(0.0);
@@ -66,9 +80,12 @@ double raycastGround(const World& world, const Eigen::Vector3d& o, const Eigen::
     if (f_next <= 0.0) return refineCrossing(gap, t, f, t_next, f_next, opt.tolerance_m);
     t = t_next;
     f = f_next;
+    if (t > give_up_after) return kInf;
   }
   return kInf;
 }
+
+}  // namespace
 
 PreparedBox::PreparedBox(const Obstacle& o)
     : obstacle(&o), centre(o.centre), half_extent(o.half_extent), cos_yaw(std::cos(o.yaw)), sin_yaw(std::sin(o.yaw)) {}
@@ -187,21 +204,33 @@ RayHit finishHit(RayHit hit, double best, double ground_range, const World& worl
 
 RayHit raycast(const World& world, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range,
                const ObstacleFan& fan, const RaycastOptions& opt) {
+  // The nearest box first (the same box, entry and normal the ground-first order finds when it is
+  // nearer than the ground: its entry does not depend on the range limit), then the ground march,
+  // which gives up once it is past that box (1 um margin, far above the rounding of a crossing
+  // inside its bracket): a ray into a building no longer marches the ground behind it to
+  // max_range. Where the ground is hit first, the march and so the hit are the same as before.
   RayHit hit;
-  double best = opt.ground ? raycastGround(world, o, d, max_range, opt) : kInf;
-  const double ground_range = best;
+  double obstacle_range = kInf;
   if (opt.obstacles) {
     for (const int i : fan.candidates(d)) {
       Eigen::Vector3d n;
       const PreparedBox& box = fan.boxes()[i];
-      const double t = intersectBox(box, o, d, 0.0, std::min(best, max_range), &n);
-      if (t < best) {
-        best = t;
+      const double t = intersectBox(box, o, d, 0.0, std::min(obstacle_range, max_range), &n);
+      if (t < obstacle_range) {
+        obstacle_range = t;
         hit.is_obstacle = true;
         hit.obstacle = box.obstacle;
         hit.normal = n;
       }
     }
+  }
+  const double give_up = hit.is_obstacle ? obstacle_range + 1e-6 : kInf;
+  const double ground_range = opt.ground ? marchGround(world, o, d, max_range, opt, give_up) : kInf;
+  double best = ground_range;
+  if (hit.is_obstacle && obstacle_range < ground_range) {
+    best = obstacle_range;
+  } else {
+    hit = RayHit();  // the ground is as near: no box
   }
   return finishHit(hit, best, ground_range, world, o, d, max_range);
 }

@@ -3,13 +3,69 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
+#include <optional>
 #include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <future>
+#include <memory>
+#include <mutex>
+#include <thread>
 #include <variant>
 
 namespace lanemap::sim {
 namespace {
 
 int64_t toUtime(int64_t start, double t) { return start + static_cast<int64_t>(std::llround(t * 1e6)); }
+
+// A fixed set of threads running queued tasks in submission order. The destructor drops tasks not
+// started (their futures then report a broken promise) and joins.
+class WorkerPool {
+ public:
+  explicit WorkerPool(int threads) {
+    for (int i = 0; i < threads; ++i) workers_.emplace_back([this] { work(); });
+  }
+  ~WorkerPool() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+      tasks_.clear();
+    }
+    wake_.notify_all();
+    for (auto& w : workers_) w.join();
+  }
+  template <typename F>
+  auto submit(F f) -> std::future<decltype(f())> {
+    auto task = std::make_shared<std::packaged_task<decltype(f())()>>(std::move(f));
+    auto future = task->get_future();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      tasks_.emplace_back([task] { (*task)(); });
+    }
+    wake_.notify_one();
+    return future;
+  }
+
+ private:
+  void work() {
+    for (;;) {
+      std::function<void()> task;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [this] { return stop_ || !tasks_.empty(); });
+        if (stop_) return;
+        task = std::move(tasks_.front());
+        tasks_.pop_front();
+      }
+      task();
+    }
+  }
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::function<void()>> tasks_;
+  bool stop_ = false;
+  std::vector<std::thread> workers_;
+};
 
 }  // namespace
 
@@ -65,32 +121,86 @@ SimulatorCounts Simulator::run(SensorSink& sink, const std::function<void(double
   const double t0_abs = static_cast<double>(options_.start_utime) * 1e-6;  // for LIDAR clock
   const int64_t hour_us = 3600LL * 1000000LL;
   const int64_t hour_base = options_.start_utime / hour_us * hour_us;
+  const int threads = options_.threads > 0 ? options_.threads
+                                           : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 
   // Each sensor keeps its own schedule; the earliest next measurement is emitted first, so the
   // sink sees time order. A LIDAR sweep is emitted when it is complete, as a driver publishes it.
+  enum class Kind { kPose, kCamera, kLidar };
+  struct Event {
+    Kind kind = Kind::kPose;
+    double t = 0.0;
+    int64_t index = 0;
+    std::future<CameraMeasurement> camera;        // with workers: the frame being rendered
+    std::future<LidarScanner::Cast> lidar;        // with workers: the sweep being cast
+  };
   int64_t pose_i = 0, cam_i = 0, sweep_i = 0;
-  int64_t last_packet_utime = 0;
-  double last_progress = -1.0;
-  for (;;) {
+  auto next = [&]() -> std::optional<Event> {
     const double tp = pose_i * pose_dt;
     const double tc = cam_i * cam_dt;
     const double ts = scanner_ ? (sweep_i + 1) * sweep_dt : 1e300;  // end of the sweep
     const double t = std::min({tp, tc, ts});
-    if (t > T) break;
+    if (t > T) return std::nullopt;
+    Event e;
+    e.t = t;
     if (t == tp) {
-      sink.onPose(poseAt(tp, noise, pose_dt));
-      ++pose_i;
-      ++counts.poses;
+      e.kind = Kind::kPose;
+      e.index = pose_i++;
     } else if (t == tc) {
-      sink.onCamera(cameraAt(tc, cam_i));
-      ++cam_i;
+      e.kind = Kind::kCamera;
+      e.index = cam_i++;
+    } else {
+      e.kind = Kind::kLidar;
+      e.index = sweep_i++;
+    }
+    return e;
+  };
+  auto castSweep = [this, t0_abs, sweep_dt](int64_t i) {
+    return scanner_->cast(
+        world_, t0_abs + i * sweep_dt,
+        [this, t0_abs](double t_abs) { return trajectory_.at(t_abs - t0_abs).vehicle_to_enu; },
+        options_.seed * 7777ULL + static_cast<uint64_t>(i));
+  };
+
+  // With workers, frames and sweeps are started up to 2 per worker ahead of the one emitted.
+  std::optional<WorkerPool> pool;
+  if (threads > 1) pool.emplace(threads);
+  const int ahead = threads > 1 ? 2 * threads : 0;
+  std::deque<Event> window;
+  int started = 0;  // frames and sweeps in the window
+  bool schedule_done = false;
+
+  int64_t last_packet_utime = 0;
+  double last_progress = -1.0;
+  for (;;) {
+    while (!schedule_done && (window.empty() || started < ahead)) {
+      std::optional<Event> e = next();
+      if (!e) {
+        schedule_done = true;
+        break;
+      }
+      if (pool && e->kind == Kind::kCamera) {
+        e->camera = pool->submit([this, t = e->t, i = e->index] { return cameraAt(t, i); });
+      } else if (pool && e->kind == Kind::kLidar) {
+        e->lidar = pool->submit([&castSweep, i = e->index] { return castSweep(i); });
+      }
+      if (e->kind != Kind::kPose) ++started;
+      window.push_back(std::move(*e));
+    }
+    if (window.empty()) break;
+    Event e = std::move(window.front());
+    window.pop_front();
+    const double t = e.t;
+    if (e.kind == Kind::kPose) {
+      sink.onPose(poseAt(t, noise, pose_dt));
+      ++counts.poses;
+    } else if (e.kind == Kind::kCamera) {
+      --started;
+      sink.onCamera(pool ? e.camera.get() : cameraAt(t, e.index));
       ++counts.camera_frames;
     } else {
-      const LidarSweep sweep = scanner_->scan(
-          world_, t0_abs + sweep_i * sweep_dt,
-          [this, t0_abs](double t_abs) { return trajectory_.at(t_abs - t0_abs).vehicle_to_enu; },
-          options_.seed * 7777ULL + static_cast<uint64_t>(sweep_i));
-      ++sweep_i;
+      --started;
+      const LidarSweep sweep = scanner_->encode(pool ? e.lidar.get() : castSweep(e.index));
       if (!sweep.packets.empty()) {
         LidarMeasurement m;
         m.packets = sweep.packets;
@@ -105,7 +215,7 @@ SimulatorCounts Simulator::run(SensorSink& sink, const std::function<void(double
           last_packet_utime = u;
         }
         m.utime = m.packet_utime.front();
-        m.publish_utime = toUtime(options_.start_utime, ts);
+        m.publish_utime = toUtime(options_.start_utime, t);
         counts.lidar_packets += static_cast<int64_t>(m.packets.size());
         ++counts.lidar_sweeps;
         sink.onLidar(m);

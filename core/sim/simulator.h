@@ -64,6 +64,11 @@ struct SimulatorOptions {
   int jpeg_quality = 90;
   uint64_t seed = 1;
   PoseNoiseOptions pose_noise;
+  // Threads that render camera frames and cast LIDAR sweeps ahead of the one being emitted
+  // (0: one per core; 1: everything on the calling thread). The output is the same for any count:
+  // every frame and sweep depends only on its time and the seed, and the packet encoder, the pose
+  // noise and the sink run on the calling thread in time order.
+  int threads = 0;
 };
 
 struct SimulatorCounts {

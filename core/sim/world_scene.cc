@@ -29,6 +29,17 @@ constexpr int kTlsSlots = 4;
 thread_local TlsTile t_tiles[kTlsSlots];
 thread_local unsigned t_next = 0;
 
+// The tile this thread was given last and the box of points that certainly fall in it (its square
+// shrunk by a billionth of its side, so that floor(east / tile_size) cannot round to a neighbour
+// inside the box): most queries (the steps of one ray) land in the same tile as the one before,
+// and then need neither the key's divisions nor the slot search. The tile is held by a slot.
+struct TlsLast {
+  uint64_t uid = 0;
+  double xlo = 1.0, xhi = 0.0, ylo = 1.0, yhi = 0.0;  // empty
+  const Tile* tile = nullptr;
+};
+thread_local TlsLast t_last;
+
 uint64_t hashPixel(int64_t x, int64_t y) {
   uint64_t h = static_cast<uint64_t>(x) * 0x9E3779B97F4A7C15ULL ^ (static_cast<uint64_t>(y) + 0x632BE59BD9B4E019ULL);
   h ^= h >> 31;
@@ -59,17 +70,30 @@ int64_t SimWorld::Impl::tileKeyAt(double east, double north, int64_t* ix, int64_
 }
 
 const Tile& SimWorld::Impl::tileAt(double east, double north) const {
+  const TlsLast& last = t_last;
+  if (last.uid == uid && east >= last.xlo && east < last.xhi && north >= last.ylo && north < last.yhi) {
+    return *last.tile;
+  }
   int64_t ix = 0, iy = 0;
   const int64_t key = tileKeyAt(east, north, &ix, &iy);
+  const Tile* found = nullptr;
   for (auto& t : t_tiles) {
-    if (t.uid == uid && t.key == key && t.tile) return *t.tile;
+    if (t.uid == uid && t.key == key && t.tile) {
+      found = t.tile.get();
+      break;
+    }
   }
-  auto tile = fetchTile(key, ix, iy);
-  TlsTile& slot = t_tiles[t_next++ % kTlsSlots];
-  slot.uid = uid;
-  slot.key = key;
-  slot.tile = std::move(tile);
-  return *slot.tile;
+  if (!found) {
+    auto tile = fetchTile(key, ix, iy);
+    TlsTile& slot = t_tiles[t_next++ % kTlsSlots];
+    slot.uid = uid;
+    slot.key = key;
+    slot.tile = std::move(tile);
+    found = slot.tile.get();
+  }
+  const double size = options.tile_size_m, margin = 1e-9 * size;
+  t_last = TlsLast{uid, ix * size + margin, (ix + 1) * size - margin, iy * size + margin, (iy + 1) * size - margin, found};
+  return *found;
 }
 
 std::shared_ptr<const Tile> SimWorld::Impl::fetchTile(int64_t key, int64_t ix, int64_t iy) const {
@@ -183,8 +207,11 @@ std::shared_ptr<const Tile> SimWorld::Impl::buildTile(int64_t ix, int64_t iy) co
   if (options.flat) {
     tile->height = cv::Mat(2, 2, CV_32F, cv::Scalar(0.0f));
     tile->hn = 1;
-    return tile;
   }
+  tile->hres = size / tile->hn;
+  int exponent = 0;
+  if (std::frexp(tile->hres, &exponent) == 0.5) tile->inv_hres = std::ldexp(1.0, 1 - exponent);
+  if (options.flat) return tile;
   const int hn = tile->hn;
   const double hres = size / hn;
   cv::Mat profile(hn + 1, hn + 1, CV_32F, cv::Scalar(0.0f));
@@ -347,9 +374,9 @@ SimWorld::~SimWorld() = default;
 double SimWorld::height(double east, double north) const {
   if (impl_->options.flat) return 0.0;
   const Tile& t = impl_->tileAt(east, north);
-  const double hres = impl_->options.tile_size_m / t.hn;
-  const double gx = std::clamp((east - t.x0) / hres, 0.0, static_cast<double>(t.hn));
-  const double gy = std::clamp((north - t.y0) / hres, 0.0, static_cast<double>(t.hn));
+  const double hn = static_cast<double>(t.hn);
+  const double gx = std::clamp(t.inv_hres > 0.0 ? (east - t.x0) * t.inv_hres : (east - t.x0) / t.hres, 0.0, hn);
+  const double gy = std::clamp(t.inv_hres > 0.0 ? (north - t.y0) * t.inv_hres : (north - t.y0) / t.hres, 0.0, hn);
   const int c = std::min(static_cast<int>(gx), t.hn - 1);
   const int r = std::min(static_cast<int>(gy), t.hn - 1);
   const double u = gx - c, v = gy - r;

@@ -72,6 +72,9 @@ struct Tile {
   cv::Mat lane;                 // CV_16U, index into lanelet_ids (0: none)
   std::vector<int64_t> lanelet_ids;
   cv::Mat height;               // CV_32F, (hn + 1) x (hn + 1) nodes
+  double hres = 1.0;            // height cell size: tile_size_m / hn
+  double inv_hres = 0.0;        // 1 / hres when hres is a power of two (then x * inv_hres is x / hres
+                                // to the bit), else 0: divide
   size_t bytes() const;
 };
 

@@ -21,6 +21,11 @@ else
 fi
 du -sh "$out/drive"/* | sed 's/^/   /'
 
+# Issue 17: the simulator's speed on a dense city (Monaco: buildings, parked cars), camera + LIDAR,
+# beside the drive's duration (target >= 4x real time on 2 cores); about 2-3 minutes.
+echo "== lanemap-sim speed: Monaco 60 s drive, camera + LIDAR (tools/bench/sim_speed.sh)"
+tools/bench/sim_speed.sh "$build" --duration 60
+
 echo "== lane exploration (particle filter per 100 m of road, N = 500 and 2000)"
 "$bin/lanemap-bench-lanes"
 

@@ -394,4 +394,48 @@ TEST(Explorer, RoadFirstSeenTwentyMetresIn) {
   for (const Lane& l : rep.result.lanes) EXPECT_NEAR(l.s_begin, 3.0, 0.5) << "lane " << l.id;
 }
 
+// Issue 16, roads between close junctions (the benchmark's Kingsway and Fremantle cases): a road
+// 33 m long whose ROIs leave s 15-29.8 of it, seen mostly from the junction before it. The lane
+// classes are the ego lane's cross-section's only, so what the camera saw of the road from the
+// junction is observed ground of no lane class (blocked); only 2 m of it and its last 6 m, seen from
+// the road itself, are labelled drivable. The lines and curbs are labelled wherever the car was, and the
+// junction past the end ROI has none. Every lane is still found over the whole stretch, between
+// its lines: one lane (two solid lines: drivable evidence in the strip makes it a lane) or two
+// (a dashed line between them).
+void shortRoadSeenFromTheJunction(const std::vector<double>& widths) {
+  Scenario sc = straightLanes(widths, 33.0);
+  const double s_begin = 15.0, s_end = 29.8;
+  for (auto& ln : sc.layout.lines) ln.s1 = s_end;  // the junction has no lines
+  // Labelled drivable only in two glimpses: 2 m soon after the start ROI, and the last 6 m up to
+  // where the frames taken in the junction after it begin.
+  Area glimpse = sc.layout.areas[0];
+  glimpse.s0 = 17.5;
+  glimpse.s1 = 19.5;
+  sc.layout.areas[0].s0 = 23.5;
+  sc.layout.areas[0].s1 = 29.3;
+  sc.layout.areas.push_back(glimpse);
+  const bev::BevGrid grid = paint(sc.layout);
+  RoadGeometry road;
+  road.road_id = 43;
+  road.polyline = sc.layout.ref.polyline(2.0);
+  road.s_begin = s_begin;
+  road.s_end = s_end;
+  const ExplorationResult res = exploreRoad(grid, road, {});
+  EXPECT_EQ(res.lanes.size(), widths.size());
+  std::set<int> found;
+  for (const Lane& l : res.lanes) {
+    EXPECT_NEAR(l.s_begin, s_begin, 0.5) << "lane " << l.id;
+    EXPECT_NEAR(l.s_end, s_end, 0.5) << "lane " << l.id;
+    ASSERT_GE(l.index_from_left, 0);
+    ASSERT_LT(l.index_from_left, static_cast<int>(sc.truth.size()));
+    found.insert(l.index_from_left);
+    const double truth_d = sc.truth[l.index_from_left].d(0);
+    for (const auto& p : l.waypoints) EXPECT_NEAR(sc.layout.ref.toSD(p).y(), truth_d, 0.3) << "lane " << l.id;
+  }
+  EXPECT_EQ(found.size(), widths.size());
+}
+
+TEST(Explorer, ShortRoadSeenFromTheJunctionTwoLanes) { shortRoadSeenFromTheJunction({3.5, 3.4}); }
+TEST(Explorer, ShortRoadSeenFromTheJunctionOneLane) { shortRoadSeenFromTheJunction({3.5}); }
+
 }  // namespace

@@ -105,7 +105,7 @@ struct Raster {
 // separates two lanes of one direction) or the strip is drivable in 20 % of its cells somewhere
 // in the bin (a lane the segmentation named, between a curb and a solid line). A parking strip
 // or a cycle track between a solid line and a curb is never labelled a lane.
-void markUnnamedLanes(Raster& r, const ExplorerOptions& o) {
+void markUnnamedLanes(Raster& r, const ExplorerOptions& o, bool two_way) {
   const int bin_rows = std::max(1, static_cast<int>(std::round(o.divider_bin_m / r.res)));
   const int min_cols = static_cast<int>(std::round(o.lane_width_min_m / r.res));
   const int max_cols = static_cast<int>(std::round(o.lane_width_max_m / r.res));
@@ -145,7 +145,10 @@ void markUnnamedLanes(Raster& r, const ExplorerOptions& o) {
       if (gap < min_cols || gap > max_cols) continue;
       float good_sum = 0.0f;
       for (int j = a.j1 + 1; j < b.j0; ++j) good_sum += good[j];
-      if (!a.dashed && !b.dashed && good_sum < 0.2f * (b.j0 - a.j1 - 1)) continue;
+      // The one-way road's own line runs between them: a single lane (a slip road, a link between
+      // islands), whatever the segmentation named.
+      const bool on_road = !two_way && a.j1 < r.col(0.0) && b.j0 > r.col(0.0);
+      if (!a.dashed && !b.dashed && !on_road && good_sum < 0.2f * (b.j0 - a.j1 - 1)) continue;
       for (int i = i0; i < i1; ++i) {
         for (int j = a.j1 + 1; j < b.j0; ++j) {
           uint8_t& c = r.code[static_cast<size_t>(i) * r.nd + j];
@@ -194,7 +197,7 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
       r.code[static_cast<size_t>(i) * r.nd + j] = c;
     }
   }
-  if (o.unnamed_lanes) markUnnamedLanes(r, o);
+  if (o.unnamed_lanes) markUnnamedLanes(r, o, road.two_way);
   // Direction divider of a two-way road: per divider_bin_m of s, the solid line nearest d = 0
   // within divider_search_m; bins without one are interpolated, a road without any uses d = 0.
   if (road.two_way) {

@@ -464,4 +464,28 @@ TEST(Explorer, NoLanesOfSpeckledGround) {
   }
 }
 
+// Issue 16, a one-lane link between two traffic islands (the benchmark's Fremantle junction): 17 m
+// of road, its ROIs leave s 5.7-11.7, curbs 3.4 m apart and nothing labelled drivable (every frame
+// of it was taken in a junction). The road's own line runs between the curbs: that is its lane,
+// not the unobserved ground at the corridor's edge.
+TEST(Explorer, OneLaneLinkBetweenIslands) {
+  Scenario sc;
+  sc.layout.ref.length = 17.0;
+  sc.layout.lines.push_back({constant(1.7), -1e9, 1e9, Line::kCurb, false});
+  sc.layout.lines.push_back({constant(-1.7), -1e9, 1e9, Line::kCurb, false});
+  sc.layout.observed_half_width = 11.0;  // beyond: unobserved, where a footprint fits too
+  const bev::BevGrid grid = paint(sc.layout);
+  RoadGeometry road;
+  road.road_id = 2;
+  road.polyline = sc.layout.ref.polyline(2.0);
+  road.s_begin = 5.7;
+  road.s_end = 11.7;
+  const ExplorationResult res = exploreRoad(grid, road, {});
+  ASSERT_EQ(res.lanes.size(), 1u);
+  for (const auto& p : res.lanes[0].waypoints) EXPECT_NEAR(sc.layout.ref.toSD(p).y(), 0.0, 0.3);
+  EXPECT_GE(res.lanes[0].s_end - res.lanes[0].s_begin, 0.8 * 6.0);
+  EXPECT_EQ(res.lanes[0].left.type, map::LineType::kCurb);
+  EXPECT_EQ(res.lanes[0].right.type, map::LineType::kCurb);
+}
+
 }  // namespace

@@ -99,7 +99,8 @@ struct Raster {
 // short road between close junctions, or after a turn, most of what the camera saw of it), is
 // observed ground of no lane class, i.e. blocked, and would end the exploration there. The lines
 // are labelled whatever lane the car is in. Per bin of divider_bin_m along s: the painted lines
-// of the bin (columns with dashes in at least 10 % of its rows, or a solid line or curb in 30 %);
+// of the bin (columns with dashes in at least 10 % of its rows, or a solid line, a curb or the
+// divider of a two-way road (beyond it: outside, painted or not) in 30 %);
 // between two neighbouring lines lane_width_min_m to lane_width_max_m apart, the strip is a lane
 // (its blocked cells become drivable) when one of the lines is dashed (a dashed line only ever
 // separates two lanes of one direction) or the strip is drivable in 20 % of its cells somewhere
@@ -118,7 +119,7 @@ void markUnnamedLanes(Raster& r, const ExplorerOptions& o, bool two_way) {
       for (int i = i0; i < i1; ++i) {
         const uint8_t c = r.at(i, j);
         da += c == kDashed;
-        ed += c == kSolid || c == kCurb;
+        ed += c == kSolid || c == kCurb || c == kOutside;  // the divider of a two-way road too
         go += c == kDrivable;
       }
       dashed[j] = da / n;
@@ -197,7 +198,6 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
       r.code[static_cast<size_t>(i) * r.nd + j] = c;
     }
   }
-  if (o.unnamed_lanes) markUnnamedLanes(r, o, road.two_way);
   // Direction divider of a two-way road: per divider_bin_m of s, the solid line nearest d = 0
   // within divider_search_m; bins without one are interpolated, a road without any uses d = 0.
   if (road.two_way) {
@@ -240,6 +240,7 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
       }
     }
   }
+  if (o.unnamed_lanes) markUnnamedLanes(r, o, road.two_way);
   // Our carriageway: per bin along s, walk out from the road's centre line (or the nearest drivable
   // column to it) to the first wall (blocked or curb in most rows of the bin, at least
   // carriageway_wall_m wide): a median, a sidewalk, a parking strip. Beyond it lie other roads

@@ -488,4 +488,18 @@ TEST(Explorer, OneLaneLinkBetweenIslands) {
   EXPECT_EQ(res.lanes[0].right.type, map::LineType::kCurb);
 }
 
+// Issue 16, a two-way road with an unpainted centre (the benchmark's Roosevelt links): two lanes
+// our way, the divider never seen, and the left lane observed only from the junction (blocked:
+// no lane class). Our carriageway ends at the divider (d = 0), and the strip between it and the
+// dashed line is the left lane.
+TEST(Explorer, TwoWayRoadWithAnUnpaintedCentreKeepsItsLeftLane) {
+  Scenario sc = straightLanes({3.5, 3.5}, 60.0, 0.0, true);
+  auto& lines = sc.layout.lines;
+  lines.erase(std::remove_if(lines.begin(), lines.end(), [](const Line& l) { return std::abs(l.d(0)) < 0.2; }),
+              lines.end());
+  sc.layout.areas[0].dhi = constant(-3.6);  // drivable: our right lane only
+  const Report rep = run(sc);
+  expectLanes(rep, sc);
+}
+
 }  // namespace

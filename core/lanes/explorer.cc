@@ -289,6 +289,9 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
       }
     }
   }
+  // Again, now that our carriageway's outer edges are known too (a lane beside a wall the curb of
+  // which was not seen).
+  if (o.unnamed_lanes) markUnnamedLanes(r, o, road.two_way);
   const int nd1 = r.nd + 1;
   r.dead_sat.assign(static_cast<size_t>(r.ns + 1) * nd1, 0);
   r.good_sat.assign(static_cast<size_t>(r.ns + 1) * nd1, 0);

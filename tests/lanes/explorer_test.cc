@@ -502,4 +502,23 @@ TEST(Explorer, TwoWayRoadWithAnUnpaintedCentreKeepsItsLeftLane) {
   expectLanes(rep, sc);
 }
 
+// Issue 16, a lane beside the sidewalk whose edge was not seen (the benchmark's Roosevelt links,
+// model labels): two lanes one way, no right edge line or curb labelled, the right lane named
+// drivable in 2 m of every 5 (the rest background: seen from the junction) and 3 m of sidewalk
+// beyond it. The sidewalk is a wall, our carriageway ends there, and the strip between that edge
+// and the dashed line is the right lane, whole.
+TEST(Explorer, LaneBesideAnUnseenKerbIsWhole) {
+  Scenario sc = straightLanes({3.5, 3.5}, 80.0);
+  auto& lines = sc.layout.lines;
+  lines.erase(std::remove_if(lines.begin(), lines.end(), [](const Line& l) { return l.d(0) < -3.0; }), lines.end());
+  sc.layout.areas[0].dlo = constant(0.1);  // the left lane ...
+  for (double s0 = 0.0; s0 < 80.0; s0 += 5.0) {  // ... and glimpses of the right one
+    sc.layout.areas.push_back({constant(-3.5), constant(-0.1), s0, s0 + 2.0});
+  }
+  sc.layout.boxes.push_back({-1e9, 1e9, -6.5, -3.5});  // the sidewalk: observed, never drivable
+  const Report rep = run(sc);
+  expectLanes(rep, sc);
+  for (const Lane& l : rep.result.lanes) EXPECT_GT(l.s_end - l.s_begin, 70.0) << "lane " << l.id;
+}
+
 }  // namespace

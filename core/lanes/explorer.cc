@@ -746,17 +746,17 @@ std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const Ro
     if (lane.split_from == lane.id) lane.split_from = -1;
     if (lane.merges_into == lane.id) lane.merges_into = -1;
   }
-  // A lane that leaves a lane and comes back into the same one within bulge_max_m, holding fewer
-  // particles per metre than bulge_density_fraction of that lane's, is a stretch where a few
-  // particles found room (noise the lines left), not a lane (a bus bay holds its share): dropped,
-  // the others renumbered.
+  // A piece beside a lane (it splits off it, merges into it, or both with the same one) holding
+  // fewer particles per metre than bulge_density_fraction of that lane's is a stretch where a few
+  // particles found room (noise the lines left), not a lane (a bus bay or a turn pocket holds its
+  // share): dropped, the others renumbered.
   auto density = [](const Lane& l) { return l.particle_samples / std::max(1.0, l.s_end - l.s_begin); };
   std::vector<int> new_id(lanes.size(), -1);
   std::vector<Lane> kept;
   for (auto& lane : lanes) {
-    const bool bulge = lane.split_from >= 0 && lane.split_from == lane.merges_into &&
-                       lane.s_end - lane.s_begin < o.bulge_max_m &&
-                       density(lane) < o.bulge_density_fraction * density(lanes[lane.split_from]);
+    const int beside = lane.split_from >= 0 ? lane.split_from : lane.merges_into;
+    const bool bulge = beside >= 0 && (lane.split_from < 0 || lane.merges_into < 0 || lane.split_from == lane.merges_into) &&
+                       density(lane) < o.bulge_density_fraction * density(lanes[beside]);
     if (bulge) continue;
     new_id[lane.id] = static_cast<int>(kept.size());
     kept.push_back(std::move(lane));

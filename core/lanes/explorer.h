@@ -25,7 +25,8 @@
 //    clusters are linked along s into lanes, so a lane can start (split) or end (merge) mid-road; a
 //    lane that loses its particles for less than lane_gap_max_m (parked car) continues; lanes
 //    inside one wide cluster (a stretch with no markings) coast with their last offsets.
-//    A lane that splits off a lane and merges back into it within bulge_max_m is dropped.
+//    A piece beside a lane (splitting off it, merging into it) with a fraction of its particles is
+//    dropped.
 // 4. Each lane's particle history is regressed (Eq. 6: piecewise linear with optimised break
 //    points, then a natural cubic spline) as d(s); way-points every waypoint_spacing_m.
 // 5. Boundaries: from each way-point, probe left and right along the normal until a marking, curb,

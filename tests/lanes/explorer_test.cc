@@ -458,9 +458,8 @@ TEST(Explorer, NoLanesOfSpeckledGround) {
   const Report without = run(sc, 1, off);
   EXPECT_GE(without.result.lanes.size(), 4u) << "without the rule the pieces are lanes";
   for (const Lane& l : without.result.lanes) {
-    if (l.split_from < 0) continue;
-    EXPECT_EQ(l.split_from, l.merges_into) << "lane " << l.id;
-    EXPECT_LT(l.s_end - l.s_begin, ExplorerOptions{}.bulge_max_m) << "lane " << l.id;
+    if (l.split_from < 0 && l.merges_into < 0) continue;
+    EXPECT_LT(l.s_end - l.s_begin, 40.0) << "lane " << l.id << ": a piece";
   }
 }
 

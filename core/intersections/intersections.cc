@@ -290,7 +290,10 @@ class Builder {
       }
       std::vector<Movements> moves;
       for (const auto& l : a.lanes) moves.push_back(l.moves);
-      for (const auto& [i, o] : pairLanes(moves, static_cast<int>(d.lanes.size()), movement, uturn, o_.right_hand_traffic)) {
+      std::vector<std::pair<int, int>> pairs;
+      if (!uturn && movement == TurnDirection::kStraight) pairs = pairByOffset(a, d);
+      if (pairs.empty()) pairs = pairLanes(moves, static_cast<int>(d.lanes.size()), movement, uturn, o_.right_hand_traffic);
+      for (const auto& [i, o] : pairs) {
         if (connect(a, i, d, o, movement, false)) ++connections[i];
       }
     }
@@ -310,6 +313,44 @@ class Builder {
       const int o = o_.right_hand_traffic ? std::min(i, nout - 1) : nout - 1 - std::min(nin - 1 - i, nout - 1);
       connect(a, i, *straightest, o, movement, true);
     }
+  }
+
+  // Straight on with fewer lanes mapped on one side than on the other (a lane the drive did not
+  // find, or not yet): counted from the left, k -> k would join lanes that do not continue each
+  // other. When no lane of `a` is tagged and both roads are one-way (or both two-way), each lane of
+  // `a` pairs with the lane of `d` at its offset from the road's line (the roads' lines continue
+  // each other straight on), within
+  // offset_match_m and 1 m nearer than any other, in order; empty when the counts agree, nothing
+  // pairs or a lane lies between two (the rules then).
+  std::vector<std::pair<int, int>> pairByOffset(const Approach& a, const Approach& d) const {
+    std::vector<std::pair<int, int>> out;
+    if (a.lanes.size() == d.lanes.size() || o_.offset_match_m <= 0.0) return out;
+    // Offsets compare between two one-way roads or two two-way ones (d = 0 the divider on both).
+    if ((a.road->reverse_id >= 0) != (d.road->reverse_id >= 0)) return out;
+    for (const auto& l : a.lanes) {
+      if (l.moves.specified || l.pocket) return out;
+    }
+    int next = 0;  // out lanes left of a pair's are taken
+    for (int i = 0; i < static_cast<int>(a.lanes.size()); ++i) {
+      int best = -1;
+      double best_e = INFINITY, second_e = INFINITY;
+      for (int o = next; o < static_cast<int>(d.lanes.size()); ++o) {
+        const double e = std::abs(d.lanes[o].lateral - a.lanes[i].lateral);
+        if (e < best_e) {
+          second_e = best_e;
+          best_e = e;
+          best = o;
+        } else {
+          second_e = std::min(second_e, e);
+        }
+      }
+      if (best < 0 || best_e > o_.offset_match_m) continue;
+      // A lane between two (one lane becoming two: a lane added, not one unmapped): the rules say.
+      if (second_e - best_e < 1.0) return {};
+      out.emplace_back(i, best);
+      next = best + 1;
+    }
+    return out;
   }
 
   // Adds the intersection lanelet from lane i of `a` to lane o of `d`; false (and listed in
@@ -497,6 +538,7 @@ IntersectionOptions IntersectionOptions::fromYaml(const config::YamlReader& r) {
   r.read("pockets_are_turn_lanes", o.pockets_are_turn_lanes);
   r.read("connect_orphan_lanes", o.connect_orphan_lanes);
   r.read("straight_max_deg", o.straight_max_deg);
+  r.read("offset_match_m", o.offset_match_m);
   r.read("uturn_min_deg", o.uturn_min_deg);
   r.read("end_tolerance_m", o.end_tolerance_m);
   r.read("unseen_end_m", o.unseen_end_m);
@@ -524,6 +566,7 @@ void IntersectionOptions::validate() const {
   check(straight_max_deg > 0.0 && straight_max_deg < 90.0, "straight_max_deg must be in (0, 90)");
   check(end_tolerance_m >= 0.0, "end_tolerance_m must be >= 0");
   check(unseen_end_m >= 0.0, "unseen_end_m must be >= 0");
+  check(offset_match_m >= 0.0, "offset_match_m must be >= 0");
   check(lane_tangent_m > 0.0, "lane_tangent_m must be > 0");
   check(road_tangent_m > 0.0, "road_tangent_m must be > 0");
   check(pocket_min_m >= 0.0, "pocket_min_m must be >= 0");

@@ -59,6 +59,7 @@ class BevSampler {
 struct Raster {
   double sa = 0, res = 0.1, d0 = 0;  // row i at s = sa + (i + 0.5) res; column j at d = d0 + (j + 0.5) res
   int ns = 0, nd = 0;
+  int live_i0 = 0, live_i1 = -1;  // rows of the explored stretch [s_begin, s_end]
   std::vector<uint8_t> code;
   std::vector<int32_t> dead_sat, good_sat;  // summed-area tables, (ns + 1) x (nd + 1)
 
@@ -74,11 +75,12 @@ struct Raster {
            sat[static_cast<size_t>(i1 + 1) * nd1 + j0] + sat[static_cast<size_t>(i0) * nd1 + j0];
   }
   // Deadly cells in [s0, s1] x [d0, d1]; a box leaving the corridor sideways counts as deadly,
-  // rows beyond the raster's ends as free.
+  // rows beyond the explored stretch (live_i0..live_i1: the ROIs of I_i and I_j, where this road's
+  // lanes are not) as free.
   int deadly(double s0, double s1, double dlo, double dhi) const {
     int j0 = col(dlo), j1 = col(dhi);
     if (j0 < 0 || j1 >= nd) return 1;
-    int i0 = std::max(0, row(s0)), i1 = std::min(ns - 1, row(s1));
+    int i0 = std::max(live_i0, row(s0)), i1 = std::min(live_i1, row(s1));
     if (i1 < i0) return 0;
     return box(dead_sat, nd + 1, i0, i1, j0, j1);
   }
@@ -91,36 +93,38 @@ struct Raster {
   }
 };
 
-// Lanes the segmentation does not name. It labels the ego lane and two lanes either side; a lane
-// beyond them (the fourth and fifth lanes of an avenue, seen from the first) is observed asphalt
-// of no lane class, i.e. blocked, and would end the exploration there. Per bin of
-// divider_bin_m along s: the painted lines of the bin (columns with dashes in at least 10 % of its
-// rows, or a solid line or curb in 30 %); between two neighbouring lines lane_width_min_m to
-// lane_width_max_m apart, at least one of them dashed (a dashed line only ever separates two lanes
-// of one direction), a strip with no drivable cell in 90 % of the bin's rows of every column
-// (blocked, or the blurred edge of a line) and blocked in 80 % of its cells is a lane: its blocked
-// cells become drivable. A parked car fills a few rows of a bin, not 90 %.
-void markUnnamedLanes(Raster& r, const ExplorerOptions& o) {
+// Lanes between painted lines. The segmentation labels the ego lane and two lanes either side, and
+// only in the ego lane's cross-section: a lane beyond them (the fourth and fifth lanes of an
+// avenue, seen from the first), and the asphalt of a road seen from the junction before it (on a
+// short road between close junctions, or after a turn, most of what the camera saw of it), is
+// observed ground of no lane class, i.e. blocked, and would end the exploration there. The lines
+// are labelled whatever lane the car is in. Per bin of divider_bin_m along s: the painted lines
+// of the bin (columns with dashes in at least 10 % of its rows, or a solid line, a curb or the
+// divider of a two-way road (beyond it: outside, painted or not) in 30 %);
+// between two neighbouring lines lane_width_min_m to lane_width_max_m apart, the strip is a lane
+// (its blocked cells become drivable) when one of the lines is dashed (a dashed line only ever
+// separates two lanes of one direction) or the strip is drivable in 20 % of its cells somewhere
+// in the bin (a lane the segmentation named, between a curb and a solid line). A parking strip
+// or a cycle track between a solid line and a curb is never labelled a lane.
+void markUnnamedLanes(Raster& r, const ExplorerOptions& o, bool two_way) {
   const int bin_rows = std::max(1, static_cast<int>(std::round(o.divider_bin_m / r.res)));
   const int min_cols = static_cast<int>(std::round(o.lane_width_min_m / r.res));
   const int max_cols = static_cast<int>(std::round(o.lane_width_max_m / r.res));
-  std::vector<float> dashed(r.nd), edge(r.nd), blocked(r.nd), closed(r.nd);
+  std::vector<float> dashed(r.nd), edge(r.nd), good(r.nd);
   for (int i0 = 0; i0 < r.ns; i0 += bin_rows) {
     const int i1 = std::min(r.ns, i0 + bin_rows);
     const float n = static_cast<float>(i1 - i0);
     for (int j = 0; j < r.nd; ++j) {
-      int da = 0, ed = 0, bl = 0, cl = 0;
+      int da = 0, ed = 0, go = 0;
       for (int i = i0; i < i1; ++i) {
         const uint8_t c = r.at(i, j);
         da += c == kDashed;
-        ed += c == kSolid || c == kCurb;
-        bl += c == kBlocked;
-        cl += c >= kBlocked && c != kOutside;
+        ed += c == kSolid || c == kCurb || c == kOutside;  // the divider of a two-way road too
+        go += c == kDrivable;
       }
       dashed[j] = da / n;
       edge[j] = ed / n;
-      blocked[j] = bl / n;
-      closed[j] = cl / n;
+      good[j] = go / n;
     }
     // Painted lines of the bin, left to right in d: runs of marked columns.
     struct Paint { int j0, j1; bool dashed; };
@@ -138,16 +142,14 @@ void markUnnamedLanes(Raster& r, const ExplorerOptions& o) {
     for (size_t k = 0; k + 1 < lines.size(); ++k) {
       const Paint& a = lines[k];
       const Paint& b = lines[k + 1];
-      if (!a.dashed && !b.dashed) continue;
       const int gap = b.j0 - a.j1;
       if (gap < min_cols || gap > max_cols) continue;
-      bool lane = true;
-      float blocked_sum = 0.0f;
-      for (int j = a.j1 + 1; j < b.j0 && lane; ++j) {
-        lane = closed[j] >= 0.9f;
-        blocked_sum += blocked[j];
-      }
-      if (!lane || blocked_sum < 0.8f * (b.j0 - a.j1 - 1)) continue;
+      float good_sum = 0.0f;
+      for (int j = a.j1 + 1; j < b.j0; ++j) good_sum += good[j];
+      // The one-way road's own line runs between them: a single lane (a slip road, a link between
+      // islands), whatever the segmentation named.
+      const bool on_road = !two_way && a.j1 < r.col(0.0) && b.j0 > r.col(0.0);
+      if (!a.dashed && !b.dashed && !on_road && good_sum < 0.2f * (b.j0 - a.j1 - 1)) continue;
       for (int i = i0; i < i1; ++i) {
         for (int j = a.j1 + 1; j < b.j0; ++j) {
           uint8_t& c = r.code[static_cast<size_t>(i) * r.nd + j];
@@ -167,6 +169,8 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
   r.d0 = -o.corridor_half_width_m;
   r.nd = static_cast<int>(std::ceil(2 * o.corridor_half_width_m / r.res));
   r.code.assign(static_cast<size_t>(r.ns) * r.nd, kUnobserved);
+  r.live_i0 = std::clamp(r.row(road.s_begin), 0, r.ns - 1);
+  r.live_i1 = std::clamp(r.row(road.s_end), 0, r.ns - 1);
   BevSampler sampler(grid);
   const size_t L = sampler.layerStride();
   auto layer = [&](const uint16_t* t, size_t idx, bev::Layer l) { return t[static_cast<size_t>(l) * L + idx]; };
@@ -194,7 +198,6 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
       r.code[static_cast<size_t>(i) * r.nd + j] = c;
     }
   }
-  if (o.unnamed_lanes) markUnnamedLanes(r, o);
   // Direction divider of a two-way road: per divider_bin_m of s, the solid line nearest d = 0
   // within divider_search_m; bins without one are interpolated, a road without any uses d = 0.
   if (road.two_way) {
@@ -237,6 +240,7 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
       }
     }
   }
+  if (o.unnamed_lanes) markUnnamedLanes(r, o, road.two_way);
   // Our carriageway: per bin along s, walk out from the road's centre line (or the nearest drivable
   // column to it) to the first wall (blocked or curb in most rows of the bin, at least
   // carriageway_wall_m wide): a median, a sidewalk, a parking strip. Beyond it lie other roads
@@ -285,6 +289,9 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
       }
     }
   }
+  // Again, now that our carriageway's outer edges are known too (a lane beside a wall the curb of
+  // which was not seen).
+  if (o.unnamed_lanes) markUnnamedLanes(r, o, road.two_way);
   const int nd1 = r.nd + 1;
   r.dead_sat.assign(static_cast<size_t>(r.ns + 1) * nd1, 0);
   r.good_sat.assign(static_cast<size_t>(r.ns + 1) * nd1, 0);
@@ -739,7 +746,27 @@ std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const Ro
     if (lane.split_from == lane.id) lane.split_from = -1;
     if (lane.merges_into == lane.id) lane.merges_into = -1;
   }
-  return lanes;
+  // A piece beside a lane (it splits off it, merges into it, or both with the same one) holding
+  // fewer particles per metre than bulge_density_fraction of that lane's is a stretch where a few
+  // particles found room (noise the lines left), not a lane (a bus bay or a turn pocket holds its
+  // share): dropped, the others renumbered.
+  auto density = [](const Lane& l) { return l.particle_samples / std::max(1.0, l.s_end - l.s_begin); };
+  std::vector<int> new_id(lanes.size(), -1);
+  std::vector<Lane> kept;
+  for (auto& lane : lanes) {
+    const int beside = lane.split_from >= 0 ? lane.split_from : lane.merges_into;
+    const bool bulge = beside >= 0 && (lane.split_from < 0 || lane.merges_into < 0 || lane.split_from == lane.merges_into) &&
+                       density(lane) < o.bulge_density_fraction * density(lanes[beside]);
+    if (bulge) continue;
+    new_id[lane.id] = static_cast<int>(kept.size());
+    kept.push_back(std::move(lane));
+  }
+  for (auto& lane : kept) {
+    lane.id = new_id[lane.id];
+    if (lane.split_from >= 0) lane.split_from = new_id[lane.split_from];
+    if (lane.merges_into >= 0) lane.merges_into = new_id[lane.merges_into];
+  }
+  return kept;
 }
 
 // Probe one side (dir +1 left, -1 right) from (s, d) along the normal until a marking, curb,

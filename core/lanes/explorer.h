@@ -8,8 +8,10 @@
 //    blocked (observed, not drivable), lane separation, dashed, solid, curb, or outside our
 //    direction (beyond the divider of a two-way road). A cell seen drivable drivable_min_count
 //    times is drivable (frames taken in a junction label the roads around it background); a
-//    blocked strip a lane wide between painted lines, one dashed, is a lane the segmentation does
-//    not name (beyond its +-2 lane classes). A road whose stretch between its ROIs is shorter than
+//    blocked strip a lane wide between painted lines (one dashed, or drivable somewhere along the bin) is a
+//    lane the segmentation does not name (beyond its +-2 lane classes, or seen from the junction
+//    before the road: the lane classes are the ego lane's cross-section's only). Only the
+//    explored stretch kills a particle (past the ROI edges lie the junctions). A road whose stretch between its ROIs is shorter than
 //    short_road_min_m is explored over that much around its middle (explorationStretch).
 // 2. Particle filter: N car footprints (3 m x 1.5 m) start as a strip across the road start and
 //    move by the paper's motion model (Eq. 5) with v ~ U(0.9, 1.1), w ~ U(-0.2, 0.2) per particle
@@ -23,6 +25,8 @@
 //    clusters are linked along s into lanes, so a lane can start (split) or end (merge) mid-road; a
 //    lane that loses its particles for less than lane_gap_max_m (parked car) continues; lanes
 //    inside one wide cluster (a stretch with no markings) coast with their last offsets.
+//    A piece beside a lane (splitting off it, merging into it) with a fraction of its particles is
+//    dropped.
 // 4. Each lane's particle history is regressed (Eq. 6: piecewise linear with optimised break
 //    points, then a natural cubic spline) as d(s); way-points every waypoint_spacing_m.
 // 5. Boundaries: from each way-point, probe left and right along the normal until a marking, curb,

@@ -73,6 +73,9 @@ struct ExplorerOptions {
                                          //   link between close junctions) is explored over this
                                          //   much around the stretch's middle, into the ROIs
   double split_neighbour_m = 4.5;        // a lane born/ending this close to another splits/merges
+  double bulge_density_fraction = 0.15;  // a lane that splits off or merges into a lane with fewer
+                                         //   particles per metre than this fraction of that lane's
+                                         //   is noise beside it, not a lane
 
   // --- centre line regression (Eq. 6) and way-points ---
   double bin_m = 1.0;                    // particle positions are binned along s (exact for Eq. 6)

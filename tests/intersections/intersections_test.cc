@@ -226,6 +226,38 @@ TEST(IntersectionTopology, OneWayStreets) {
   EXPECT_EQ(pairs(net), expected);
 }
 
+// Issue 16: straight on, a lane the drive did not map (Kingsway: 1 of 2 lanes found on the road
+// into the junction). One-way streets of two lanes; the left lane of S -> C is missing from the
+// map. Its right lane continues the right lane of C -> N (same offset from the way), not the left
+// one that k -> k from the left would give it; its right turn is unchanged.
+TEST(IntersectionTopology, StraightOnWithALaneUnmappedPairsByOffset) {
+  const lanemap::osm::Tags ow{{"oneway", "yes"}, {"lanes", "2"}};
+  Net net = crossing(ow, ow, ow, ow);
+  const auto sk = net.build();
+  std::map<int64_t, lanemap::map::LaneMap> roads;
+  for (const auto& r : sk.roads()) {
+    LaneSpec spec;
+    spec.lanes = laneCount(r);
+    roads[r.id] = roadLanes(sk, r, spec);
+    if (r.from == 2 && r.to == 1) {
+      auto& ll = roads[r.id].lanelets;
+      ll.erase(std::remove_if(ll.begin(), ll.end(), [](const auto& l) { return l.index_from_left == 0; }), ll.end());
+    }
+  }
+  const auto with = [&](double offset_match_m) {
+    IntersectionOptions o;
+    o.offset_match_m = offset_match_m;
+    return pairsOf(sk, buildIntersection(sk, 1, roads, o, net.data.restrictions));
+  };
+  const std::vector<Pair> expected = sorted({
+      {2, 0, 3, 1}, {2, 0, 5, 1},                // from S, its one mapped lane: straight, right
+      {4, 0, 5, 0}, {4, 1, 5, 1}, {4, 0, 3, 0},  // from W: as with every lane mapped
+  });
+  EXPECT_EQ(with(1.5), expected);
+  const std::vector<Pair> by_index = with(0.0);
+  EXPECT_TRUE(std::count(by_index.begin(), by_index.end(), Pair{2, 0, 3, 0}) == 1) << "k -> k from the left";
+}
+
 TEST(IntersectionTopology, TurnLanesDecideWhichLanesTurn) {
   const lanemap::osm::Tags s{{"lanes:forward", "3"}, {"lanes:backward", "1"},
                              {"turn:lanes:forward", "left|through|through;right"}};

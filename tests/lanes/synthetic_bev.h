@@ -70,12 +70,17 @@ struct Area {  // drivable between dlo(s) and dhi(s)
 struct Box {  // observed, not drivable (a parked car)
   double s0, s1, d0, d1;
 };
+struct Speckles {  // cells labelled dashed line at random (a far line smeared by the projection)
+  double s0, s1, d0, d1;
+  double share;     // of the cells
+};
 
 struct Layout {
   Reference ref;
   std::vector<Line> lines;
   std::vector<Area> areas;
   std::vector<Box> boxes;
+  std::vector<Speckles> speckles;
   double observed_half_width = 14.0;
   double observed_s0 = -1e9;  // nothing observed before this s (a road first seen this far in)
   double drivable_share = 1.0;  // of a drivable cell's observations, the share labelled drivable
@@ -120,6 +125,12 @@ inline bev::BevGrid paint(const Layout& L) {
           marked = true;
         } else if (ln.kind == Line::kDashed && e <= 0.075 + res / 2 && std::fmod(s - ln.s0, 9.0) < 3.0) {
           g.add(cell, bev::Layer::kDashedLine, obs - (U(rng) < 0.3));
+          marked = true;
+        }
+      }
+      for (const Speckles& sp : L.speckles) {
+        if (s >= sp.s0 && s <= sp.s1 && d >= sp.d0 && d <= sp.d1 && U(rng) < sp.share) {
+          g.add(cell, bev::Layer::kDashedLine, obs);
           marked = true;
         }
       }

@@ -365,7 +365,7 @@ int main(int argc, char** argv) {
       }
       if (log.events() == 0) throw std::runtime_error("not an LCM log, or no whole event in it: " + path + " (" + log.damageReport() + ")");
       if (log.damaged() || g_undecodable > undecodable_before) {
-        std::fprintf(stderr, "lanemap-offline: warning: %s is damaged, mapping what could be read: %s; %lld messages did not decode\n",
+        std::fprintf(stderr, "lanemap-offline: warning: the log is damaged, mapping what could be read (%s): %s; %lld messages did not decode\n",
                      path.c_str(), log.damageReport().c_str(), static_cast<long long>(g_undecodable - undecodable_before));
         damaged = true;
       }

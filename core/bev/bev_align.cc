@@ -60,6 +60,13 @@ Alignment estimateShift(const BevGrid& reference, const BevGrid& traversal, cons
     a.why = "the grids do not overlap";
     return a;
   }
+  // A long diagonal road's box is mostly empty; past ~40 M cells (a 630 m square at 0.1 m: ~0.5 GB
+  // of images) the road is merged unaligned rather than risk the memory.
+  if (static_cast<double>(box.sizes().x() + 2 * radius) * (box.sizes().y() + 2 * radius) > 40e6) {
+    a.why = "the overlap's box is too large to align (" + std::to_string(box.sizes().x()) + " x " +
+            std::to_string(box.sizes().y()) + " cells)";
+    return a;
+  }
   cv::Mat seen_t, seen_r;
   cv::Mat templ = lineImage(traversal, box, &seen_t);
   cv::Mat search = lineImage(reference, grown(box, radius), &seen_r);

@@ -13,6 +13,7 @@
 // their `hostname:` keys. The launcher exits when none of its processes runs or will restart:
 // 0 if every process ended with status 0, else 1 (and 0 after a SIGINT/SIGTERM stop).
 // The file format is described in docs/recording.md and config/launch/car.yaml.
+#include "core/io/store_lock.h"
 #include "processes/framework/share_dir.h"
 
 #include <CLI/CLI.hpp>
@@ -346,13 +347,17 @@ class Launcher {
     p.last_status = status;
     const double ran_s = std::chrono::duration<double>(Clock::now() - p.started).count();
     const bool failed = status != 0;
-    const bool restart = p.spec.restart == Restart::kAlways || (p.spec.restart == Restart::kOnFailure && failed);
+    // Exit 4: another process holds its map store (core/io/store_lock.h): a restart would fail the same way.
+    const bool store_in_use = status == lanemap::io::kExitStoreInUse;
+    const bool restart = !store_in_use && (p.spec.restart == Restart::kAlways || (p.spec.restart == Restart::kOnFailure && failed));
     const std::string how = status >= 0 ? "exited with status " + std::to_string(status)
                                         : std::string("killed by signal ") + strsignal(-status);
     if (!restart) {
       p.done = true;
-      log(p.spec.host + "/" + p.spec.name + ": " + how + " after " + fixed(ran_s) + " s (restart: " +
-          toString(p.spec.restart) + ")");
+      if (store_in_use) p.failed_for_good = true;
+      log(p.spec.host + "/" + p.spec.name + ": " + how + " after " + fixed(ran_s) + " s (" +
+          (store_in_use ? std::string("its map store is held by another process: not restarted")
+                        : "restart: " + std::string(toString(p.spec.restart))) + ")");
       return;
     }
     if (p.spec.max_restarts >= 0 && p.restarts >= p.spec.max_restarts) {

@@ -24,9 +24,11 @@ class StoreInUseError : public StoreError {
   using StoreError::StoreError;
 };
 
-// Exit codes of the processes for these (documented in docs/robustness.md).
+// Exit codes of the processes for these (documented in docs/robustness.md). 3 is the framework's
+// "cannot open LCM", which a restart may cure; a store held by another process is 4, which
+// lanemap-launch never restarts (it would only fail again).
 inline constexpr int kExitStoreError = 2;
-inline constexpr int kExitStoreInUse = 3;
+inline constexpr int kExitStoreInUse = 4;
 
 class StoreLock {
  public:

@@ -104,6 +104,18 @@ TEST(Launch, RestartPoliciesBackOffAndGiveUp) {
   EXPECT_EQ(lines(dir.str("always")), 3) << a.output;
 }
 
+TEST(Launch, AProcessWhoseStoreIsHeldElsewhereIsNotRestarted) {
+  // Exit 4 (core/io/store_lock.h kExitStoreInUse): another BEV builder or lane mapper holds the store.
+  TempDir dir("launch-held");
+  std::ofstream(dir.str("l.yaml")) << "hosts: {a: {}}\nprocesses:\n"
+                                      "  - {name: held, host: a, command: 'echo run >> " + dir.str("held") +
+                                          "; exit 4', restart: on-failure, restart_delay_s: 0.05}\n";
+  const auto r = runCommand(launchBin() + " " + dir.str("l.yaml") + " --all-hosts --status-interval 0");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(lines(dir.str("held")), 1) << r.output;
+  EXPECT_NE(r.output.find("its map store is held by another process: not restarted"), std::string::npos) << r.output;
+}
+
 TEST(Launch, SigtermStopsEveryProcessAndKillsOneThatIgnoresIt) {
   TempDir dir("launch-stop");
   std::ofstream(dir.str("l.yaml")) << "hosts: {a: {}}\nprocesses:\n"

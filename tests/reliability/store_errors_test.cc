@@ -151,7 +151,7 @@ TEST(StoreLock, ASecondWriterIsRefusedNamingTheHolderAndAKilledHolderBlocksNothi
   close(fds[1]);
 }
 
-TEST(StoreLock, ASecondBevBuilderOrLaneMapperOnTheSameStoreExitsWith3) {
+TEST(StoreLock, ASecondBevBuilderOrLaneMapperOnTheSameStoreExitsWith4) {
   lt::TempDir dir("store-lock-proc");
   const std::string store = dir.str("store");
   for (const std::string name : {"bev-builder", "lane-mapper"}) {

@@ -465,9 +465,8 @@ class Launcher {
 };
 
 std::string binDir() {
-  char exe[4096] = {0};
-  if (readlink("/proc/self/exe", exe, sizeof(exe) - 1) > 0) return fs::path(exe).parent_path().string();
-  return ".";
+  const fs::path dir = lanemap::executableDir();
+  return dir.empty() ? "." : dir.string();
 }
 
 }  // namespace

@@ -232,7 +232,7 @@ class OfflineMapper {
                               {"correlation", a.correlation}, {"overlap_cells", a.overlap_cells}, {"why", a.why}});
         grid = &(fused_[road.road_id] = std::move(fused));
       }
-      grid->save((fs::path(o_.out) / "bev" / ("road_" + std::to_string(road.road_id) + ".bev")).string());
+      grid->save(bev::roadGridPath(o_.out, road.road_id));
       const auto* r = sk_.road(road.road_id);
       if (!r) continue;
       nlohmann::json entry = {{"road_id", road.road_id}, {"from", r->from}, {"to", r->to}, {"drive", drives_}};

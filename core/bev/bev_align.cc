@@ -125,19 +125,7 @@ Alignment estimateShift(const BevGrid& reference, const BevGrid& traversal, cons
 
 BevGrid shiftedGrid(const BevGrid& grid, const Eigen::Vector2i& shift) {
   BevGrid out(grid.options());
-  const int t = grid.options().tile_cells;
-  const size_t plane = static_cast<size_t>(t) * t;
-  grid.forEachTile([&](const BevGrid::Cell& origin, const uint16_t* counts) {
-    for (int l = 0; l < kNumLayers; ++l) {
-      for (int r = 0; r < t; ++r) {
-        for (int c = 0; c < t; ++c) {
-          const uint16_t n = counts[static_cast<size_t>(l) * plane + static_cast<size_t>(r) * t + c];
-          if (n) out.add(BevGrid::Cell(origin.x() + c + shift.x(), origin.y() + r + shift.y()), static_cast<Layer>(l), n);
-        }
-      }
-    }
-  });
-  for (int i = 0; i < grid.frames(); ++i) out.addFrame();
+  mergeGrid(grid, out, shift);
   return out;
 }
 
@@ -161,7 +149,7 @@ Alignment mergeAligned(const BevGrid& traversal, BevGrid& fused, bool align, con
                                    static_cast<int>(std::lround(-a.shift_cells.y() * w)));
   const Eigen::Vector2i traversal_move = a.shift_cells + fused_move;
   if (fused_move != Eigen::Vector2i::Zero()) fused = shiftedGrid(fused, fused_move);
-  mergeGrid(traversal_move == Eigen::Vector2i::Zero() ? traversal : shiftedGrid(traversal, traversal_move), fused);
+  mergeGrid(traversal, fused, traversal_move);
   return a;
 }
 

@@ -12,7 +12,7 @@
 
 namespace lanemap::bev {
 
-void mergeGrid(const BevGrid& src, BevGrid& dst) {
+void mergeGrid(const BevGrid& src, BevGrid& dst, const Eigen::Vector2i& shift) {
   if (src.resolution() != dst.resolution() || src.options().tile_cells != dst.options().tile_cells) {
     throw BevError("cannot merge BEV grids of different resolution or tile size");
   }
@@ -22,7 +22,7 @@ void mergeGrid(const BevGrid& src, BevGrid& dst) {
       for (int r = 0; r < t; ++r) {
         for (int c = 0; c < t; ++c) {
           const uint16_t n = counts[static_cast<size_t>(l) * t * t + static_cast<size_t>(r) * t + c];
-          if (n) dst.add(BevGrid::Cell(origin.x() + c, origin.y() + r), static_cast<Layer>(l), n);
+          if (n) dst.add(BevGrid::Cell(origin.x() + c + shift.x(), origin.y() + r + shift.y()), static_cast<Layer>(l), n);
         }
       }
     }
@@ -128,16 +128,24 @@ std::string checkpointPath(const std::string& store, int64_t road_id) {
 // found after a crash whose road's stored grid has more frames since was stored already (the
 // crash came between storeRoad and removeCheckpoint) and is not carried on again, which would
 // count its frames twice.
+namespace {
+// A checkpoint's JSON: its grid (hash), its newest frame, and the road's stored frames then.
+void writeCheckpointMeta(const std::string& store, int64_t road_id, const BevGrid& grid, int64_t last_frame_utime,
+                         int64_t stored_frames) {
+  const nlohmann::json meta{{"road_id", road_id},
+                            {"last_frame_utime", last_frame_utime},
+                            {"frames", grid.frames()},
+                            {"grid_hash", std::to_string(gridHash(grid))},
+                            {"stored_frames", stored_frames}};
+  io::writeFileAtomically(checkpointMeta(store, road_id).string(), meta.dump() + "\n");
+}
+}  // namespace
+
 void storeCheckpoint(const std::string& store, const RoadBev& road, int64_t last_frame_utime) {
   io::createDirectories(checkpointDir(store).string());
   const int64_t stored = storedFrames(roadGridPath(store, road.road_id));
   road.grid.save(checkpointPath(store, road.road_id));
-  const nlohmann::json meta{{"road_id", road.road_id},
-                            {"last_frame_utime", last_frame_utime},
-                            {"frames", road.grid.frames()},
-                            {"grid_hash", std::to_string(gridHash(road.grid))},
-                            {"stored_frames", stored}};
-  io::writeFileAtomically(checkpointMeta(store, road.road_id).string(), meta.dump() + "\n");
+  writeCheckpointMeta(store, road.road_id, road.grid, last_frame_utime, stored);
 }
 
 bool removeCheckpoint(const std::string& store, int64_t road_id) {
@@ -186,10 +194,7 @@ std::vector<Checkpoint> loadCheckpoints(const std::string& store, std::vector<st
         // is newer than anything stored, its newest frame unknown (0). Its JSON is written now, so
         // that a crash after this road is stored and before the checkpoint is removed is still
         // recognised (else the next start would carry the stored frames on a second time).
-        const nlohmann::json fixed{{"road_id", road_id}, {"last_frame_utime", 0}, {"frames", c.grid.frames()},
-                                   {"grid_hash", std::to_string(gridHash(c.grid))},
-                                   {"stored_frames", storedFrames(roadGridPath(store, road_id))}};
-        io::writeFileAtomically(checkpointMeta(store, road_id).string(), fixed.dump() + "\n");
+        writeCheckpointMeta(store, road_id, c.grid, 0, storedFrames(roadGridPath(store, road_id)));
       }
       out.push_back(std::move(c));
     } catch (const std::exception& e) {

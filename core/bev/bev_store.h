@@ -25,8 +25,9 @@
 
 namespace lanemap::bev {
 
-// Adds every count of `src` to `dst` (same resolution and tile size, else BevError).
-void mergeGrid(const BevGrid& src, BevGrid& dst);
+// Adds every count of `src` to `dst`, each `shift` cells away (same resolution and tile size, else
+// BevError); dst gets src's frames too.
+void mergeGrid(const BevGrid& src, BevGrid& dst, const Eigen::Vector2i& shift = Eigen::Vector2i::Zero());
 
 struct StoredRoad {
   std::string path;

@@ -17,13 +17,13 @@ bool hasConfig(const fs::path& dir) {
   return fs::is_directory(dir / "config", ec);
 }
 
-fs::path exeDir() {
+}  // namespace
+
+fs::path executableDir() {
   char exe[4096] = {0};
   const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
   return n > 0 ? fs::path(std::string(exe, static_cast<std::size_t>(n))).parent_path() : fs::path();
 }
-
-}  // namespace
 
 fs::path shareDir() {
   if (const char* env = std::getenv("LANEMAP_DATA_DIR"); env && *env) {
@@ -32,7 +32,7 @@ fs::path shareDir() {
     }
     return env;
   }
-  const fs::path installed = exeDir().parent_path() / "share" / "lanemap";
+  const fs::path installed = executableDir().parent_path() / "share" / "lanemap";
   if (hasConfig(installed)) return installed;
 #ifdef LANEMAP_SOURCE_DIR
   if (hasConfig(LANEMAP_SOURCE_DIR)) return LANEMAP_SOURCE_DIR;

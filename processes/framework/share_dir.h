@@ -12,6 +12,9 @@ namespace lanemap {
 // The folder; throws std::runtime_error naming what was tried when none exists.
 std::filesystem::path shareDir();
 
+// The folder of the running program (/proc/self/exe); empty when it cannot be read.
+std::filesystem::path executableDir();
+
 // shareDir() / relative, as a string (e.g. shareFile("config/vehicle.yaml")).
 std::string shareFile(const std::string& relative);
 

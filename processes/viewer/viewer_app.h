@@ -31,6 +31,7 @@
 #include "lanemap/status_t.hpp"
 #include "processes/framework/channels.h"
 #include "processes/framework/lane_map_message.h"
+#include "processes/framework/share_dir.h"
 #include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
 #include "processes/framework/process_configs.h"
@@ -276,10 +277,8 @@ inline viewer::HttpHandler makeHandler(viewer::ViewerState& state, std::map<std:
 
 // build/bin/lanemap-viewer -> build/share/lanemap/viewer (where CMake puts the page).
 inline std::string defaultAssets() {
-  char exe[4096] = {0};
-  const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
-  if (n <= 0) return "";
-  return (fs::path(exe).parent_path().parent_path() / "share" / "lanemap" / "viewer").string();
+  const fs::path bin = executableDir();
+  return bin.empty() ? "" : (bin.parent_path() / "share" / "lanemap" / "viewer").string();
 }
 
 }  // namespace lanemap::viewer_app

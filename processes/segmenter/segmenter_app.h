@@ -38,6 +38,7 @@
 #include <opencv2/core.hpp>
 #include <atomic>
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -174,9 +175,29 @@ class OracleApp {
 };
 
 // Offline: every camera frame of a log segmented; returns the number of frames that failed.
+// The output is written to OUT.partial and renamed to OUT only when the whole input was read: a
+// failure (not a log, a write error) leaves no OUT, partial or empty, behind.
+inline int64_t segmentLogInto(LogReader& in, LcmLogWriter& out, const std::string& in_path, const std::string& out_path,
+                              const Settings& s, seg::Segmenter& model);
 inline int64_t segmentLog(const std::string& in_path, const std::string& out_path, const Settings& s, seg::Segmenter& model) {
   LogReader in(in_path);  // a damaged log: what is readable is segmented, and said
-  LcmLogWriter out(out_path);
+  const std::string partial = out_path + ".partial";
+  int64_t bad = 0;
+  try {
+    {
+      LcmLogWriter out(partial);
+      bad = segmentLogInto(in, out, in_path, out_path, s, model);
+    }  // closed (flushed) before the rename
+    std::filesystem::rename(partial, out_path);
+  } catch (...) {
+    std::error_code ec;
+    std::filesystem::remove(partial, ec);
+    throw;
+  }
+  return bad;
+}
+inline int64_t segmentLogInto(LogReader& in, LcmLogWriter& out, const std::string& in_path, const std::string& out_path,
+                              const Settings& s, seg::Segmenter& model) {
   int64_t frames = 0, bad = 0;
   while (const lcm::LogEvent* ev = in.next()) {
     out.write(ev->channel, ev->timestamp, ev->data, static_cast<size_t>(ev->datalen));

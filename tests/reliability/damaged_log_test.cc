@@ -154,6 +154,24 @@ TEST(DamagedLog, OfflineMapsWhatIsReadableSaysSoAndRefusesANonLog) {
   EXPECT_NE(n.output.find("not an LCM log, or no whole event in it"), std::string::npos) << n.output;
   EXPECT_FALSE(fs::exists(dir.str("noise/map.osm")));
   EXPECT_FALSE(fs::exists(dir.str("noise/summary.json")));
+
+  // The segmenter's log mode on the same non-log: exit 2, says why, and leaves no output behind
+  // (neither the output nor its .partial), where it used to leave an empty log. A log file already
+  // at the output path is not replaced by a failed run.
+  const auto segment = [&](const std::string& out) {
+    return lt::runCommand(lt::binPath("lanemap-segmenter") + " --config config/segmenter.yaml" +
+                          " --lcm-url memq:// --log-in " + dir.str("noise.lcmlog") + " --log-out " + out);
+  };
+  const auto sn = segment(dir.str("noise-seg.lcmlog"));
+  EXPECT_EQ(sn.exit_code, 2) << sn.output;
+  EXPECT_NE(sn.output.find("not an LCM log, or no whole event in it"), std::string::npos) << sn.output;
+  EXPECT_FALSE(fs::exists(dir.str("noise-seg.lcmlog")));
+  EXPECT_FALSE(fs::exists(dir.str("noise-seg.lcmlog.partial")));
+  writeBytes(dir.str("earlier-seg.lcmlog"), "an earlier output");
+  const auto se = segment(dir.str("earlier-seg.lcmlog"));
+  EXPECT_EQ(se.exit_code, 2) << se.output;
+  EXPECT_EQ(readBytes(dir.str("earlier-seg.lcmlog")), "an earlier output");
+  EXPECT_FALSE(fs::exists(dir.str("earlier-seg.lcmlog.partial")));
 }
 
 }  // namespace

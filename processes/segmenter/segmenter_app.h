@@ -26,6 +26,7 @@
 // lanemap-offline can map a recorded drive on the model's labels.
 #pragma once
 
+#include "core/io/atomic_file.h"
 #include "core/seg/segmenter.h"
 #include "lanemap/image_t.hpp"
 #include "lanemap/label_image_t.hpp"
@@ -174,28 +175,8 @@ class OracleApp {
   Settings s_;
 };
 
-// Offline: every camera frame of a log segmented; returns the number of frames that failed.
-// The output is written to OUT.partial and renamed to OUT only when the whole input was read: a
-// failure (not a log, a write error) leaves no OUT, partial or empty, behind.
-inline int64_t segmentLogInto(LogReader& in, LcmLogWriter& out, const std::string& in_path, const std::string& out_path,
-                              const Settings& s, seg::Segmenter& model);
-inline int64_t segmentLog(const std::string& in_path, const std::string& out_path, const Settings& s, seg::Segmenter& model) {
-  LogReader in(in_path);  // a damaged log: what is readable is segmented, and said
-  const std::string partial = out_path + ".partial";
-  int64_t bad = 0;
-  try {
-    {
-      LcmLogWriter out(partial);
-      bad = segmentLogInto(in, out, in_path, out_path, s, model);
-    }  // closed (flushed) before the rename
-    std::filesystem::rename(partial, out_path);
-  } catch (...) {
-    std::error_code ec;
-    std::filesystem::remove(partial, ec);
-    throw;
-  }
-  return bad;
-}
+// Offline: every camera frame of the log `in` segmented into `out`; returns the number of frames
+// that failed.
 inline int64_t segmentLogInto(LogReader& in, LcmLogWriter& out, const std::string& in_path, const std::string& out_path,
                               const Settings& s, seg::Segmenter& model) {
   int64_t frames = 0, bad = 0;
@@ -231,6 +212,27 @@ inline int64_t segmentLogInto(LogReader& in, LcmLogWriter& out, const std::strin
   if (in.events() == 0) throw std::runtime_error("not an LCM log, or no whole event in it: " + in_path + " (" + in.damageReport() + ")");
   if (in.damaged()) std::cerr << "segmenter: warning: the log is damaged, segmented what could be read: " << in.damageReport() << "\n";
   std::cerr << "segmenter: " << frames << " frames segmented into " << out_path << ", " << bad << " skipped\n";
+  return bad;
+}
+
+// segmentLogInto from the file IN_PATH to OUT_PATH. The output is written to OUT_PATH.partial and
+// renamed over OUT_PATH only when the whole input was read: a failure (not a log, a write error)
+// leaves no output, partial or empty, behind, and an earlier file at OUT_PATH as it was.
+inline int64_t segmentLog(const std::string& in_path, const std::string& out_path, const Settings& s, seg::Segmenter& model) {
+  LogReader in(in_path);  // a damaged log: what is readable is segmented, and said
+  const std::string partial = out_path + ".partial";
+  int64_t bad = 0;
+  try {
+    {
+      LcmLogWriter out(partial);
+      bad = segmentLogInto(in, out, in_path, out_path, s, model);
+    }  // closed (flushed) before the rename
+    io::renameFileDurably(partial, out_path);
+  } catch (...) {
+    std::error_code ec;
+    std::filesystem::remove(partial, ec);
+    throw;
+  }
   return bad;
 }
 

@@ -251,15 +251,27 @@ RenderedFrame CameraRenderer::render(const World& world, const Eigen::Isometry3d
   std::optional<ShadowGrid> shadows;
   if (o.shadows && sun_up) shadows.emplace(world, origin, sun, o);
 
-  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
-    for (int v = rows.start; v < rows.end; ++v) {
-      auto* bgr = frame.rgb.ptr<cv::Vec3b>(v);
-      auto* label = frame.labels.ptr<uint8_t>(v);
-      auto* range = frame.range.ptr<float>(v);
-      for (int u = 0; u < width; ++u) {
+  // Column by column, from the bottom of the image (the nearest ground) up: where the ray of the
+  // pixel below was still above the ground up to some distance, this one is too (when it climbs
+  // away from it faster than the ground can rise: clearanceCarriesOver), so its ground march starts
+  // there. The columns are independent, so the frame does not depend on the thread count.
+  cv::parallel_for_(cv::Range(0, width), [&](const cv::Range& columns) {
+    for (int u = columns.start; u < columns.end; ++u) {
+      double clear_below = 0.0;
+      Eigen::Vector3d dir_below = Eigen::Vector3d::Zero();
+      for (int v = height - 1; v >= 0; --v) {
+        auto* bgr = frame.rgb.ptr<cv::Vec3b>(v);
+        auto* label = frame.labels.ptr<uint8_t>(v);
+        auto* range = frame.range.ptr<float>(v);
         const size_t index = static_cast<size_t>(v) * width + u;
         const Eigen::Vector3d dir = rotation * rays_vehicle_[index];
-        const RayHit hit = raycast(world, origin, dir, o.max_range_m, fan, o.raycast);
+        const double clear_until =
+            o.march_from_pixel_below && clear_below > 0.0 && clearanceCarriesOver(dir_below, dir, o.raycast.max_ground_slope)
+                ? clear_below
+                : 0.0;
+        const RayHit hit = raycast(world, origin, dir, o.max_range_m, fan, o.raycast, clear_until);
+        clear_below = hit.ground_clear;
+        dir_below = dir;
         const uint64_t pixel_hash = mix64(noise_seed ^ (index * 0x2545f4914f6cdd1dULL));
 
         Rgb colour;

@@ -48,7 +48,8 @@ double refineCrossing(const GroundGap& gap, double a, double fa, double b, doubl
 }
 
 double marchGround(const World& world, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                   double max_range, const RaycastOptions& opt, double give_up_after);
+                   double max_range, const RaycastOptions& opt, double give_up_after, double start = 0.0,
+                   double* clear = nullptr);
 
 }  // namespace
 
@@ -62,17 +63,33 @@ namespace {
 // The ground march of raycastGround, which may give up early: once the ray is known to be above
 // the ground beyond `give_up_after` it returns +infinity (the crossing, if any, is farther). The
 // march visits the same points whatever `give_up_after` is, so a crossing it does return is the
-// one raycastGround returns, to the bit.
+// one raycastGround returns, to the bit. It starts at `start` (the caller knows the ray is above
+// the ground before it; see raycast's clear_until), or at 0 when the ray is not above the ground
+// there after all. `clear` (optional) receives how far the ray was found above the ground: the
+// last marched point before the crossing, the point where it gave up, or max_range.
 double marchGround(const World& world, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                   double max_range, const RaycastOptions& opt, double give_up_after) {
+                   double max_range, const RaycastOptions& opt, double give_up_after, double start,
+                   double* clear) {
   const GroundGap gap{world, o, d};
+  double scratch = 0.0;
+  double& clear_until = clear ? *clear : scratch;
   double t = 0.0;
-  double f = gap(0.0);
+  double f = 0.0;
+  if (start > 0.0 && start < max_range) {
+    t = start;
+    f = gap(t);
+    if (!(f > 0.0)) t = 0.0;  // the hint does not hold here: march from the origin
+  }
+  if (t == 0.0) f = gap(0.0);
+  clear_until = t;
   if (!(f > 0.0)) return 0.0;  // starts on or under the ground
   const double horizontal = std::hypot(d.x(), d.y());
   // The fastest the gap can shrink per metre of ray: the ray's descent plus the ground's rise.
   const double closing_rate = opt.max_ground_slope * horizontal - d.z();
-  if (closing_rate <= 0.0) return kInf;  // rises faster than any ground can
+  if (closing_rate <= 0.0) {  // rises faster than any ground can
+    clear_until = kInf;
+    return kInf;
+  }
   while (t < max_range) {
     const double step = std::max(f / closing_rate, opt.min_step_m + opt.step_growth * t);
     const double t_next = std::min(t + step, max_range);
@@ -80,6 +97,7 @@ double marchGround(const World& world, const Eigen::Vector3d& o, const Eigen::Ve
     if (f_next <= 0.0) return refineCrossing(gap, t, f, t_next, f_next, opt.tolerance_m);
     t = t_next;
     f = f_next;
+    clear_until = t;
     if (t > give_up_after) return kInf;
   }
   return kInf;
@@ -203,7 +221,7 @@ RayHit finishHit(RayHit hit, double best, double ground_range, const World& worl
 }  // namespace
 
 RayHit raycast(const World& world, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range,
-               const ObstacleFan& fan, const RaycastOptions& opt) {
+               const ObstacleFan& fan, const RaycastOptions& opt, double clear_until) {
   // The nearest box first (the same box, entry and normal the ground-first order finds when it is
   // nearer than the ground: its entry does not depend on the range limit), then the ground march,
   // which gives up once it is past that box (1 um margin, far above the rounding of a crossing
@@ -225,14 +243,23 @@ RayHit raycast(const World& world, const Eigen::Vector3d& o, const Eigen::Vector
     }
   }
   const double give_up = hit.is_obstacle ? obstacle_range + 1e-6 : kInf;
-  const double ground_range = opt.ground ? marchGround(world, o, d, max_range, opt, give_up) : kInf;
+  double clear = 0.0;
+  const double ground_range = opt.ground ? marchGround(world, o, d, max_range, opt, give_up, clear_until, &clear) : kInf;
   double best = ground_range;
   if (hit.is_obstacle && obstacle_range < ground_range) {
     best = obstacle_range;
   } else {
     hit = RayHit();  // the ground is as near: no box
   }
-  return finishHit(hit, best, ground_range, world, o, d, max_range);
+  hit = finishHit(hit, best, ground_range, world, o, d, max_range);
+  hit.ground_clear = opt.ground ? clear : kInf;
+  return hit;
+}
+
+bool clearanceCarriesOver(const Eigen::Vector3d& below, const Eigen::Vector3d& above, double max_ground_slope) {
+  const double rise = above.z() - below.z();
+  const double apart = std::hypot(above.x() - below.x(), above.y() - below.y());
+  return rise > 0.0 && rise >= max_ground_slope * apart;
 }
 
 RayHit raycast(const World& world, const Eigen::Vector3d& o, const Eigen::Vector3d& d,

@@ -44,6 +44,9 @@ struct RayHit {
   bool is_obstacle = false;
   const Obstacle* obstacle = nullptr;  // the box hit (when is_obstacle)
   GroundSample ground;                 // the ground sample at the hit (when !is_obstacle)
+  // How far along the ray it was found above the ground (raycast over an ObstacleFan): just short
+  // of the ground crossing, where the march gave up behind a box, or max_range / infinity.
+  double ground_clear = 0.0;
 };
 
 // The nearest hit within (0, max_range]; hit=false when none. `unit_dir_enu` must be unit length.
@@ -81,9 +84,23 @@ class ObstacleFan {
 };
 
 // As raycast() above, the obstacles taken from a prepared fan (no World::obstaclesNear calls).
+// `clear_until` > 0: the ray is known to be above the ground before that distance (see
+// clearanceCarriesOver), so the ground march starts there instead of at the origin (and at the
+// origin after all if the ray is not above the ground there). The hit is then the same crossing
+// found from another bracket (the same surface point to within options.tolerance_m), except on a
+// ray that grazes the ground, where the other march's samples may catch (or step over) a crest the
+// ray passes under by less than the march resolves (see above: < 1 mm).
 RayHit raycast(const World& world, const Eigen::Vector3d& origin_enu,
                const Eigen::Vector3d& unit_dir_enu, double max_range, const ObstacleFan& fan,
-               const RaycastOptions& options = RaycastOptions());
+               const RaycastOptions& options = RaycastOptions(), double clear_until = 0.0);
+
+// Rays from one origin: where the ray `below` is above the ground up to distance T, the ray `above`
+// is too, when it climbs away from `below` faster than ground of slope max_ground_slope can rise
+// over the horizontal distance between them (rise >= slope * apart, per metre of ray): the same
+// slope bound the march itself relies on. A camera column (rays from the bottom of the image up)
+// then starts each ray's march where the ray below it was still above the ground.
+bool clearanceCarriesOver(const Eigen::Vector3d& below_unit_dir, const Eigen::Vector3d& above_unit_dir,
+                          double max_ground_slope);
 
 // Ground only: distance to the first ground crossing (infinity when none within max_range).
 double raycastGround(const World& world, const Eigen::Vector3d& origin_enu,

@@ -188,8 +188,8 @@ TEST(LossyBus, TenAndThirtyPercentLostAreCountedAndTheDrivenRoadIsStillMapped) {
   // R 0.5; 30 % P 0.667 R 1. The offline replay of the same drops (lanemap-fault-relay --log-in,
   // lanemap-offline) gives the same figures, so the cause is in what is lost, not in the live
   // graph's timing. It is not the graph's handling of the loss either: no frame is skipped
-  // (every kept frame is projected, with the mesh the lossless run gave it), the road opens at the
-  // same pose and closes 10 ms later. Seed 7 drops 6 of the 15 frames of 6.0-8.8 s, the frames that
+  // (every kept frame is projected), the road opens at the same pose and closes 10 ms later, and
+  // with no LIDAR sweep lost the lanes are the same. Seed 7 drops 6 of the 15 frames of 6.0-8.8 s, the frames that
   // see the lane's 3.5 m sideways shift and the new lane beside it (s 90-125 m of the road), so
   // the BEV there rests on fewer frames; with those frames
   // lost, the lane explorer's chain through the shift breaks on small pose differences: seed 7's

@@ -16,7 +16,17 @@
 // reorder_expired (held back but nothing came to overtake it within --hold-ms), delayed, and per channel received:<CH>, dropped:<CH>, duplicated:<CH>, reordered:<CH>.
 // STATUS messages seen on --from are not relayed unless --relay-status (they would mix with the
 // relay's own). Exits 0 on SIGINT/SIGTERM, or after --max-seconds.
+//
+// Log mode: --log-in IN --log-out OUT does the same to a log, with the log's timestamps as the
+// clock (a delay moves an event later, a held one waits for the next event of its channel or
+// --hold-ms of log time), and prints the counters: the same seed and rates drop the same messages
+// as live (the decisions are core/sim/bus_faults.h's, drawn per channel in the same order), so a
+// lossy run can be replayed deterministically offline (lanemap-offline --log OUT).
+//
+//   lanemap-fault-relay --log-in drive.lcmlog --log-out lossy.lcmlog --drop 0.1 --seed 7
+#include "core/sim/bus_faults.h"
 #include "processes/framework/channels.h"
+#include "processes/framework/log_reader.h"
 #include "processes/framework/process.h"
 
 #include <lcm/lcm-cpp.hpp>
@@ -24,13 +34,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
 #include <iostream>
-#include <map>
-#include <memory>
-#include <optional>
-#include <queue>
 #include <regex>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -38,252 +45,82 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using lanemap::sim::LossyBus;
 
-struct Faults {
-  double drop = 0.0, duplicate = 0.0, reorder = 0.0;
-  double delay_ms = 0.0, jitter_ms = 0.0;
-  void validate(const std::string& where) const {
-    for (double p : {drop, duplicate, reorder}) {
-      if (!(p >= 0.0 && p <= 1.0)) throw std::runtime_error(where + ": rates must be in [0, 1]");
-    }
-    if (!(delay_ms >= 0.0) || !(jitter_ms >= 0.0) || jitter_ms > delay_ms) {
-      throw std::runtime_error(where + ": need 0 <= jitter_ms <= delay_ms");
-    }
-  }
-};
+int64_t steadyUs() { return std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch()).count(); }
 
-struct Rule {
-  std::string pattern;
-  std::regex re;
-  Faults faults;
-};
-
-// "REGEX:drop=0.1,duplicate=0.02,reorder=0.05,delay_ms=20,jitter_ms=5"
-Rule parseRule(const std::string& text) {
-  const auto colon = text.rfind(':');
-  if (colon == std::string::npos || colon == 0) {
-    throw std::runtime_error("--rule '" + text + "': expected REGEX:key=value,...");
-  }
-  Rule r;
-  r.pattern = text.substr(0, colon);
-  try {
-    r.re = std::regex(r.pattern);
-  } catch (const std::regex_error& e) {
-    throw std::runtime_error("--rule '" + text + "': bad regular expression: " + e.what());
-  }
-  std::stringstream ss(text.substr(colon + 1));
-  std::string kv;
-  while (std::getline(ss, kv, ',')) {
-    const auto eq = kv.find('=');
-    if (eq == std::string::npos) throw std::runtime_error("--rule '" + text + "': '" + kv + "' is not key=value");
-    const std::string key = kv.substr(0, eq);
-    double v = 0.0;
-    try {
-      size_t used = 0;
-      v = std::stod(kv.substr(eq + 1), &used);
-      if (used != kv.size() - eq - 1) throw std::invalid_argument(kv);
-    } catch (const std::exception&) {
-      throw std::runtime_error("--rule '" + text + "': '" + kv + "' is not a number");
-    }
-    if (key == "drop") r.faults.drop = v;
-    else if (key == "duplicate") r.faults.duplicate = v;
-    else if (key == "reorder") r.faults.reorder = v;
-    else if (key == "delay_ms") r.faults.delay_ms = v;
-    else if (key == "jitter_ms") r.faults.jitter_ms = v;
-    else throw std::runtime_error("--rule '" + text + "': unknown key '" + key + "' (drop, duplicate, reorder, delay_ms, jitter_ms)");
-  }
-  r.faults.validate("--rule '" + text + "'");
-  return r;
+void copyCounters(const LossyBus& bus, lanemap::Process& process) {
+  for (const auto& [name, value] : bus.counters()) process.counters().set(name, value);
 }
 
-// splitmix64: small, fast, and the same on every platform (std distributions are not).
-struct Rng {
-  uint64_t s;
-  uint64_t next() {
-    uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
+// The log mode: IN through the bus to OUT, in log time. Returns the exit code.
+int filterLog(const std::string& in_path, const std::string& out_path, const std::string& channels, bool relay_status,
+              LossyBus& bus) {
+  lanemap::LogReader in(in_path);
+  lcm::LogFile out(out_path, "w");
+  if (!out.good()) throw std::runtime_error("cannot write log '" + out_path + "'");
+  const std::regex select(channels);
+  int64_t written = 0, passed = 0, last_us = 0;
+  auto write = [&](const std::vector<LossyBus::Message>& msgs) {
+    for (const auto& m : msgs) {
+      lcm::LogEvent ev{};
+      ev.eventnum = written;
+      ev.timestamp = m.due_us;
+      ev.channel = m.channel;
+      ev.datalen = static_cast<int32_t>(m.data.size());
+      ev.data = const_cast<uint8_t*>(m.data.data());
+      if (out.writeEvent(&ev) != 0) throw std::runtime_error("cannot write log '" + out_path + "'");
+      ++written;
+    }
+  };
+  while (const lcm::LogEvent* ev = in.next()) {
+    last_us = std::max(last_us, ev->timestamp);
+    write(bus.takeDue(ev->timestamp));  // what is due before this event
+    if ((ev->channel == lanemap::channels::kStatus && !relay_status) || !std::regex_match(ev->channel, select)) {
+      ++passed;  // not relayed live either: not in the output
+      continue;
+    }
+    bus.push(ev->channel, static_cast<const uint8_t*>(ev->data), static_cast<size_t>(ev->datalen), ev->timestamp);
+    write(bus.takeDue(ev->timestamp));
   }
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
-};
-
-uint64_t fnv1a(const std::string& s) {
-  uint64_t h = 0xcbf29ce484222325ull;
-  for (unsigned char c : s) h = (h ^ c) * 0x100000001b3ull;
-  return h;
+  write(bus.drain(last_us));
+  std::cout << "fault_relay: " << in_path << " -> " << out_path << ": " << in.events() << " events read, " << written
+            << " written, " << passed << " not relayed (STATUS or not --channels)\n";
+  for (const auto& [name, value] : bus.counters()) std::cout << name << " " << value << "\n";
+  return 0;
 }
 
-struct Message {
-  std::string channel;
-  std::vector<uint8_t> data;
-};
-
-struct Due {
-  Clock::time_point at;
-  uint64_t order;  // FIFO among messages due at the same time
-  Message msg;
-  bool operator>(const Due& o) const { return at != o.at ? at > o.at : order > o.order; }
-};
-
-class Relay {
- public:
-  Relay(lanemap::Process& process, Faults defaults, std::vector<Rule> rules, uint64_t seed, bool relay_status,
-        double hold_ms)
-      : process_(process),
-        defaults_(defaults),
-        rules_(std::move(rules)),
-        seed_(seed),
-        relay_status_(relay_status),
-        hold_(std::chrono::microseconds(static_cast<int64_t>(hold_ms * 1000))) {
-    for (const char* c : {"received", "published", "dropped", "duplicated", "reordered", "reorder_expired", "delayed"}) {
-      process_.counters().set(c, 0);
-    }
+bool hasArg(int argc, char** argv, const char* name) {  // NAME or NAME=VALUE
+  for (int i = 1; i < argc; ++i) {
+    if (std::strncmp(argv[i], name, std::strlen(name)) == 0) return true;
   }
-
-  void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    if (channel == lanemap::channels::kStatus && !relay_status_) return;
-    Channel& ch = channelState(channel);
-    auto& c = process_.counters();
-    c.add("received");
-    c.add("received:" + channel);
-    const Faults& f = *ch.faults;
-    // Always four draws per message, whatever the rates, so one decision does not shift the others.
-    const double u_drop = ch.rng.uniform(), u_dup = ch.rng.uniform(), u_reorder = ch.rng.uniform(),
-                 u_delay = ch.rng.uniform();
-    if (u_drop < f.drop) {
-      c.add("dropped");
-      c.add("dropped:" + channel);
-      return;
-    }
-    Message m{channel, std::vector<uint8_t>(static_cast<const uint8_t*>(rbuf->data),
-                                            static_cast<const uint8_t*>(rbuf->data) + rbuf->data_size)};
-    const int copies = u_dup < f.duplicate ? 2 : 1;
-    if (copies == 2) {
-      c.add("duplicated");
-      c.add("duplicated:" + channel);
-    }
-    const auto now = Clock::now();
-    auto delay = std::chrono::microseconds(0);
-    if (f.delay_ms > 0) {
-      const double ms = f.delay_ms + (2.0 * u_delay - 1.0) * f.jitter_ms;
-      delay = std::chrono::microseconds(static_cast<int64_t>(ms * 1000.0));
-      c.add("delayed");
-    }
-    if (ch.held) {  // this message overtakes the one held back
-      schedule(now + delay, m, copies);
-      schedule(now + delay, std::move(ch.held->msg), ch.held->copies);
-      ch.held.reset();
-      c.add("reordered");
-      c.add("reordered:" + channel);
-      return;
-    }
-    if (u_reorder < f.reorder) {
-      // Held back (with its duplicate) until the next message of the channel overtakes it, or
-      // hold_ms passes and it is sent in order after all.
-      ch.held = Held{std::move(m), copies, now + hold_};
-      return;
-    }
-    schedule(now + delay, std::move(m), copies);
-  }
-
-  // Publishes what is due; returns the time until the next due message (capped).
-  std::chrono::milliseconds flush() {
-    const auto now = Clock::now();
-    for (auto& [name, ch] : channels_) {
-      if (ch.held && ch.held->expires <= now) {  // nothing overtook it: sent late, in order
-        schedule(now, std::move(ch.held->msg), ch.held->copies);
-        ch.held.reset();
-        process_.counters().add("reorder_expired");
-      }
-    }
-    while (!queue_.empty() && queue_.top().at <= now) {
-      const Due& d = queue_.top();
-      process_.lcm().publish(d.msg.channel, d.msg.data.data(), static_cast<unsigned int>(d.msg.data.size()));
-      process_.counters().add("published");
-      queue_.pop();
-    }
-    auto wait = std::chrono::milliseconds(20);
-    if (!queue_.empty()) {
-      wait = std::min(wait, std::chrono::duration_cast<std::chrono::milliseconds>(queue_.top().at - now));
-    }
-    return std::max(wait, std::chrono::milliseconds(0));
-  }
-
-  // At the end: what is held or queued is sent, so nothing is lost that was not dropped.
-  void drain() {
-    for (auto& [name, ch] : channels_) {
-      if (ch.held) schedule(Clock::now(), std::move(ch.held->msg), ch.held->copies);
-      ch.held.reset();
-    }
-    while (!queue_.empty()) {
-      const Due& d = queue_.top();
-      process_.lcm().publish(d.msg.channel, d.msg.data.data(), static_cast<unsigned int>(d.msg.data.size()));
-      process_.counters().add("published");
-      queue_.pop();
-    }
-  }
-
- private:
-  struct Held {
-    Message msg;
-    int copies = 1;
-    Clock::time_point expires;
-  };
-  struct Channel {
-    const Faults* faults = nullptr;
-    Rng rng{0};
-    std::optional<Held> held;
-  };
-
-  Channel& channelState(const std::string& name) {
-    auto it = channels_.find(name);
-    if (it != channels_.end()) return it->second;
-    Channel ch;
-    ch.faults = &defaults_;
-    for (const Rule& r : rules_) {
-      if (std::regex_match(name, r.re)) {
-        ch.faults = &r.faults;
-        break;
-      }
-    }
-    ch.rng = Rng{seed_ ^ fnv1a(name)};
-    return channels_.emplace(name, std::move(ch)).first->second;
-  }
-
-  void schedule(Clock::time_point at, Message m, int copies) {
-    for (int i = 0; i < copies; ++i) {
-      queue_.push(Due{at, next_order_++, i + 1 < copies ? m : std::move(m)});
-    }
-  }
-
-  lanemap::Process& process_;
-  Faults defaults_;
-  std::vector<Rule> rules_;
-  uint64_t seed_;
-  bool relay_status_;
-  Clock::duration hold_;
-  std::map<std::string, Channel> channels_;
-  std::priority_queue<Due, std::vector<Due>, std::greater<Due>> queue_;
-  uint64_t next_order_ = 0;
-};
+  return false;
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  // The log mode publishes nothing: no bus is needed (an explicit --lcm-url is still opened).
+  const bool log_mode = hasArg(argc, argv, "--log-in");
+  if (log_mode) setenv("LCM_DEFAULT_URL", "memq://", 1);
   lanemap::Process process("fault_relay");
   auto& cli = process.cli();
   cli.description(
       "lanemap-fault-relay: republishes the messages of one LCM URL (--from) on another (--lcm-url), dropping, "
-      "duplicating, reordering and delaying them per channel at given rates, seeded");
-  std::string from;
-  Faults defaults;
+      "duplicating, reordering and delaying them per channel at given rates, seeded; or does the same to a log "
+      "(--log-in, --log-out)");
+  std::string from, log_in, log_out;
+  lanemap::sim::BusFaults defaults;
   std::vector<std::string> rule_texts;
   uint64_t seed = 1;
   bool relay_status = false;
   double hold_ms = 100.0, max_seconds = 0.0;
   std::string channels = ".*";
-  cli.add_option("--from", from, "LCM URL to subscribe to (the relay publishes on --lcm-url)")->required();
+  auto* from_opt = cli.add_option("--from", from, "LCM URL to subscribe to (the relay publishes on --lcm-url)");
+  auto* in_opt = cli.add_option("--log-in", log_in, "log mode: read this LCM log instead of --from ...")->excludes(from_opt);
+  auto* out_opt = cli.add_option("--log-out", log_out, "... and write what the bus lets through to this log");
+  in_opt->needs(out_opt);
+  out_opt->needs(in_opt);
   cli.add_option("--channels", channels, "regular expression of the channels to relay (LCM subscribe syntax)");
   cli.add_option("--drop", defaults.drop, "probability that a message is dropped");
   cli.add_option("--duplicate", defaults.duplicate, "probability that a (kept) message is sent twice");
@@ -300,25 +137,40 @@ int main(int argc, char** argv) {
   cli.add_flag("--relay-status", relay_status, "relay STATUS messages too (default: not, they mix with ours)");
   if (int rc = process.init(argc, argv); rc >= 0) return rc;
   try {
+    if (from.empty() && log_in.empty()) throw std::runtime_error("give --from URL (live) or --log-in IN --log-out OUT");
     defaults.validate("fault_relay");
     if (!(hold_ms > 0.0)) throw std::runtime_error("--hold-ms must be > 0");
-    std::vector<Rule> rules;
-    for (const auto& t : rule_texts) rules.push_back(parseRule(t));
+    std::vector<lanemap::sim::BusFaultRule> rules;
+    for (const auto& t : rule_texts) rules.push_back(lanemap::sim::parseBusFaultRule(t));
+    LossyBus bus(defaults, std::move(rules), seed, static_cast<int64_t>(hold_ms * 1000.0));
+    if (!log_in.empty()) return filterLog(log_in, log_out, channels, relay_status, bus);
     lcm::LCM in(from);
     if (!in.good()) throw std::runtime_error("cannot open LCM '" + from + "' (--from)");
-    Relay relay(process, defaults, std::move(rules), seed, relay_status, hold_ms);
+    auto publish = [&](const std::vector<LossyBus::Message>& msgs) {
+      for (const auto& m : msgs) process.lcm().publish(m.channel, m.data.data(), static_cast<unsigned int>(m.data.size()));
+      copyCounters(bus, process);
+    };
     struct Handler {
-      Relay* relay;
-      void on(const lcm::ReceiveBuffer* rbuf, const std::string& channel) { relay->onMessage(rbuf, channel); }
-    } handler{&relay};
+      LossyBus* bus;
+      bool relay_status;
+      void on(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+        if (channel == lanemap::channels::kStatus && !relay_status) return;
+        bus->push(channel, static_cast<const uint8_t*>(rbuf->data), rbuf->data_size, steadyUs());
+      }
+    } handler{&bus, relay_status};
     in.subscribe(channels, &Handler::on, &handler)->setQueueCapacity(10000);
+    copyCounters(bus, process);
     const auto start = Clock::now();
     auto next_status = start;
     while (!lanemap::Process::stopRequested()) {
-      const auto wait = relay.flush();
-      const int rc = in.handleTimeout(static_cast<int>(wait.count()));
+      publish(bus.takeDue(steadyUs()));
+      // Wait for the next message at most until the next queued one is due (20 ms at most: a held
+      // message's hold runs out too).
+      int64_t wait_ms = 20;
+      if (const auto due = bus.nextDue()) wait_ms = std::clamp<int64_t>((*due - steadyUs()) / 1000, 0, 20);
+      const int rc = in.handleTimeout(static_cast<int>(wait_ms));
       if (rc < 0 && !lanemap::Process::stopRequested()) throw std::runtime_error("LCM handle failed on --from");
-      relay.flush();
+      publish(bus.takeDue(steadyUs()));
       const auto now = Clock::now();
       if (now >= next_status) {
         process.publishStatus();
@@ -326,7 +178,7 @@ int main(int argc, char** argv) {
       }
       if (max_seconds > 0 && now - start >= std::chrono::duration<double>(max_seconds)) break;
     }
-    relay.drain();
+    publish(bus.drain(steadyUs()));
     process.setState("stopped");
     process.publishStatus();
     return 0;

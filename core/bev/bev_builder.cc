@@ -71,12 +71,14 @@ BevBuilderOptions BevBuilderOptions::fromYaml(const config::YamlReader& n) {
   const auto poses = n.section("poses");
   poses.read("keep_s", o.pose_keep_s);
   poses.read("max_gap_s", o.max_pose_gap_s);
+  poses.read("smooth_s", o.pose_smooth_s);
   poses.read("time_jump_s", o.time_jump_s);
   n.read("max_pending_frames", o.max_pending_frames);
   n.read("close_delay_s", o.close_delay_s);
   if (!(o.projector.max_range_m > 0.0)) p.fail("max_range_m", "must be > 0");
   if (!(o.ground.index.cell_m > 0.0)) l.fail("index_cell_m", "must be > 0");
   if (!(o.pose_keep_s > 0.0)) poses.fail("keep_s", "must be > 0");
+  if (!(o.pose_smooth_s >= 0.0 && o.pose_smooth_s <= 1.0)) poses.fail("smooth_s", "must be in [0, 1]");
   if (!(o.accumulator.grid.resolution_m > 0.0)) grid.fail("resolution_m", "must be > 0");
   return o;
 }
@@ -109,7 +111,7 @@ BevBuilder::BevBuilder(const skeleton::Skeleton& skeleton, const camera::CameraM
       options_(options),
       projector_(camera, options.projector),
       accumulator_(skeleton, options.accumulator),
-      poses_(options.pose_keep_s, options.max_pose_gap_s),
+      poses_(options.pose_keep_s, options.max_pose_gap_s, options.pose_smooth_s),
       pose_order_(options.time_jump_s, 3) {
   if (options_.use_lidar && options_.async_mesh) worker_ = std::thread([this] { workerLoop(); });
 }
@@ -200,7 +202,7 @@ void BevBuilder::drainFrames() {
   while (!pending_.empty()) {
     const PendingFrame& f = pending_.front();
     Eigen::Isometry3d pose;
-    const auto r = poses_.lookup(f.utime, &pose);
+    const auto r = poses_.lookup(f.utime, &pose, finishing_);
     if (r == PoseBuffer::Lookup::kTooNew || r == PoseBuffer::Lookup::kEmpty) return;
     if (r == PoseBuffer::Lookup::kOk) {
       const int64_t utime = f.utime;
@@ -288,7 +290,7 @@ void BevBuilder::addSweep(SweepData sweep) {
 
 // Decodes the waiting sweep once the poses cover its last packet; builds (or queues) its mesh.
 void BevBuilder::tryPendingSweep() {
-  if (!pending_sweep_ || poses_.newest() < pending_sweep_->packet_utime.back()) return;
+  if (!pending_sweep_ || poses_.newest() < pending_sweep_->packet_utime.back() + poses_.leadUs()) return;
   std::vector<ground::SweepPacket> packets;
   for (size_t i = 0; i < pending_sweep_->packets.size(); ++i) {
     const auto& p = pending_sweep_->packets[i];

@@ -72,6 +72,10 @@ struct BevBuilderOptions {
   double mesh_history_s = 2.0;     // finished meshes kept for late frames
   double pose_keep_s = 10.0;       // pose history
   double max_pose_gap_s = 0.25;    // two poses further apart do not interpolate
+  // Pose smoothing (PoseBuffer): a frame's and a LIDAR packet's pose is the local linear fit of
+  // the poses within +- this (0: interpolation of the two around it only). Frames wait this much
+  // longer for their poses.
+  double pose_smooth_s = 0.0;
   // Poses whose time goes back by more than this, 3 in a row (a log restarted): the pose history
   // and the frames waiting for a pose are dropped (counted), and the builder starts over in the
   // new time. A single older pose is out of order.

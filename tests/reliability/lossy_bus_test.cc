@@ -3,10 +3,14 @@
 // channel (POSE, the truth labels, LIDAR_PACKETS; seeded), and the graph (road tracker, BEV builder
 // on the truth labels, lane mapper) maps it: lossless, 10 % and 30 % lost. At each the graph keeps
 // running (no restart), says in STATUS what it lost (the relay: dropped per channel; the BEV
-// builder: frames_missed from the frames' seq, frames_missed_pct) and maps the driven road. The
-// lanes' precision and recall against the truth are printed; the issue's "within 0.05 of the
-// lossless run at 10 %" is not met on this drive (see the end of the test). Everything runs in a
-// private network namespace; ~85 s (three 18 s drives at real time).
+// builder: frames_missed from the frames' seq, frames_missed_pct) and maps the driven road, and
+// the relay drops exactly what its log mode drops of the same log (so the run can be replayed
+// offline). The lanes' precision and recall against the truth are printed; the issue's "within
+// 0.05 of the lossless run at 10 %" is not met by this drive's seed 7 (see the end of the test).
+// Everything runs in a private network namespace; ~85 s (three 18 s drives at real time).
+//
+// The second test replays the loss deterministically (log mode + lanemap-offline) for ten loss
+// seeds: 9 of 10 give the lossless lanes; why seed 7 does not is in docs/robustness.md.
 #include "core/eval/area.h"
 #include "core/eval/evaluate.h"
 #include "core/io/lanelet2.h"
@@ -25,6 +29,7 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <sstream>
 #include <string>
 
 namespace {
@@ -72,6 +77,25 @@ std::string launchFile(const std::string& dir) {
        "  - {name: player, host: car, command: \"lanemap-wait-ready --timeout 60 road_tracker bev_builder lane_mapper fault_relay && exec "
        "lcm-logplayer --lcm-url '" << kPlayerUrl << "' ${drive}/drive.lcmlog\", restart: never, start_delay_s: 1.0, stop_launch_after_s: 8.0}\n";
   return path;
+}
+
+// What lanemap-fault-relay's log mode drops of the drive's log with the live relay's seed and
+// rate: counter name -> value ("received:POSE", "dropped:POSE", ...).
+std::map<std::string, int64_t> logModeCounters(const std::string& drive, const std::string& dir, double drop) {
+  std::map<std::string, int64_t> c;
+  const auto r = lt::runCommand(lt::binPath("lanemap-fault-relay") + " --log-in " + drive + "/drive.lcmlog --log-out " + dir +
+                                "/filtered.lcmlog --drop " + std::to_string(drop) + " --seed 7");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::istringstream in(r.output);
+  std::string name;
+  int64_t value = 0;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    if (ls >> name >> value && ls.eof()) c[name] = value;
+  }
+  fs::remove(dir + "/filtered.lcmlog");
+  return c;
 }
 
 Statuses runGraph(const std::string& drive, const std::string& dir, double drop) {
@@ -140,20 +164,102 @@ TEST(LossyBus, TenAndThirtyPercentLostAreCountedAndTheDrivenRoadIsStillMapped) {
     if (drop == 0.0) EXPECT_EQ(missed, 0);
     if (drop > 0.2) EXPECT_GE(r.st.get("bev_builder", "frames_missed_pct"), 15);
     EXPECT_GE(r.st.get("lane_mapper", "roads_mapped"), 1) << "the graph maps what it can";
+    // The live relay drops what its log mode drops of the same log with the same seed (one random
+    // stream per channel): a lossy live run can be replayed offline, deterministically
+    // (lanemap-fault-relay --log-in/--log-out, then lanemap-offline). Compared for each channel the
+    // live relay received whole (the bus itself lost nothing of it).
+    const auto offline = logModeCounters(drive, dir, drop);
+    for (const char* ch : {"POSE", "SEMANTIC_FRONT_TRUTH", "LIDAR_PACKETS"}) {
+      const std::string c = ch;
+      ASSERT_TRUE(offline.count("received:" + c)) << c;
+      if (r.st.get("fault_relay", "received:" + c) != offline.at("received:" + c)) {
+        std::printf("  %s: the live relay received %lld of %lld (lost on the bus before it): not compared\n", ch,
+                    static_cast<long long>(r.st.get("fault_relay", "received:" + c)), static_cast<long long>(offline.at("received:" + c)));
+        continue;
+      }
+      EXPECT_EQ(std::max<int64_t>(0, r.st.get("fault_relay", "dropped:" + c)), offline.count("dropped:" + c) ? offline.at("dropped:" + c) : 0) << c;
+    }
     runs.push_back(r);
   }
   const auto& lossless = runs[0].report;
   ASSERT_GT(lossless.lane_recall.total, 0u);
   EXPECT_EQ(lossless.lane_recall.value(), 1.0) << "the lossless run finds every lane of the driven road";
   // Measured on this drive (2 true lanes): lossless P 0.667 R 1; 10 % on every channel P 0.333
-  // R 0.5 (one lane lost: POSE and the labels lost together; 10 % of either alone, or of the
-  // LIDAR with either, gives the lossless map); 30 % P 0.667 R 1. The issue's "within 0.05 of the
-  // lossless run" at 10 % is NOT met (docs/robustness.md): what is held here is that each lossy
-  // run maps the driven road and finds at least one of its lanes.
+  // R 0.5; 30 % P 0.667 R 1. The offline replay of the same drops (lanemap-fault-relay --log-in,
+  // lanemap-offline) gives the same figures, so the cause is in what is lost, not in the live
+  // graph's timing. It is not the graph's handling of the loss either: no frame is skipped
+  // (every kept frame is projected), the road opens at the same pose and closes 10 ms later, and
+  // with no LIDAR sweep lost the lanes are the same. Seed 7 drops 6 of the 15 frames of 6.0-8.8 s, the frames that
+  // see the lane's 3.5 m sideways shift and the new lane beside it (s 90-125 m of the road), so
+  // the BEV there rests on fewer frames; with those frames
+  // lost, the lane explorer's chain through the shift breaks on small pose differences: seed 7's
+  // POSE drops break it (the poses of frames and LIDAR packets interpolated across a 20 ms gap,
+  // the white noise of a sample apart), the POSE drops of seeds 1-6 do not, and neither lost
+  // alone does. The 120 m lane, which the lossless run finds by its RMS alone
+  // (IoU 0.59, RMS 0.12 m), then misses both IoU 0.7 and RMS 0.2 m. 9 of 10 loss seeds give
+  // the lossless lanes (the test below).
+  // The issue's "within 0.05 of the lossless run" at 10 % is NOT met by this seed
+  // (docs/robustness.md): what is held here is that each lossy run maps the driven road and finds
+  // at least one of its lanes.
   for (const Run& r : runs) {
     EXPECT_GE(r.report.lane_recall.value(), 0.5) << "drop " << r.drop;
     EXPECT_GT(r.report.lane_precision.hits, 0u) << "drop " << r.drop;
   }
+}
+
+}  // namespace
+
+namespace {
+
+// The drive's lanes mapped offline from `log` (lanemap-offline --oracle, as the live graph maps on
+// the truth labels), scored on the driven roads.
+lanemap::eval::EvalReport mapOffline(const std::string& drive, const std::string& log, const std::string& out,
+                                     const lanemap::map::LaneMap& driven, const lanemap::geo::LatLonAlt& origin) {
+  const auto r = lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --log " + log + " --osm " + drive + "/roads.osm --out " + out);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  if (r.exit_code != 0) return {};
+  return lanemap::eval::evaluate(driven, lanemap::io::readLanelet2(out + "/map.osm", origin.lat, origin.lon));
+}
+
+// The loss replayed deterministically (the relay's log mode, then lanemap-offline) for ten loss
+// seeds: what 10 % on every channel costs on this drive, not what one seed happens to cost.
+TEST(LossyBus, TenPercentLostOverTenLossSeedsGivesTheLosslessLanesButOnce) {
+  const std::string drive = lt::sharedSimDrive("osm/west-oakland.osm", lt::kBevDriveSeconds, lt::kBevDriveSeed, lt::kBevDriveArgs);
+  ASSERT_FALSE(drive.empty());
+  const auto origin = lanemap::eval::lanelet2Origin(drive + "/groundtruth.osm");
+  const auto truth = lanemap::io::readLanelet2(drive + "/groundtruth.osm", origin.lat, origin.lon);
+  const auto driven = lanemap::eval::restrictToRoads(truth, lanemap::eval::drivenRoadsFromScenario(drive + "/scenario.json"));
+  ASSERT_FALSE(driven.lanelets.empty());
+  lt::TempDir out("lossy-offline");
+  const auto lossless = mapOffline(drive, drive + "/drive.lcmlog", out.str("lossless"), driven, origin);
+  ASSERT_GT(lossless.lane_recall.total, 0u);
+  std::printf("lossless: lanes P %.3f R %.3f (%zu built)\n", lossless.lane_precision.value(), lossless.lane_recall.value(),
+              lossless.built_lanes.size());
+  size_t p_hits = 0, built = 0, r_hits = 0, truth_lanes = 0, same = 0;
+  for (int seed = 1; seed <= 10; ++seed) {
+    const std::string log = out.str("lossy-" + std::to_string(seed) + ".lcmlog");
+    const auto f = lt::runCommand(lt::binPath("lanemap-fault-relay") + " --log-in " + drive + "/drive.lcmlog --log-out " + log +
+                                  " --drop 0.1 --seed " + std::to_string(seed));
+    ASSERT_EQ(f.exit_code, 0) << f.output;
+    const auto r = mapOffline(drive, log, out.str("map-" + std::to_string(seed)), driven, origin);
+    std::printf("10 %% lost, loss seed %2d: lanes P %.3f R %.3f (%zu built)\n", seed, r.lane_precision.value(), r.lane_recall.value(),
+                r.built_lanes.size());
+    p_hits += r.lane_precision.hits;
+    built += r.lane_precision.total;
+    r_hits += r.lane_recall.hits;
+    truth_lanes += r.lane_recall.total;
+    same += r.lane_precision.value() == lossless.lane_precision.value() && r.lane_recall.value() == lossless.lane_recall.value();
+    // Whatever a seed costs, the road is mapped and one lane of it at least found.
+    EXPECT_GE(r.lane_recall.value(), 0.5) << "loss seed " << seed;
+  }
+  std::printf("10 %% lost, pooled over 10 loss seeds: lanes P %.3f R %.3f (lossless P %.3f R %.3f); %zu of 10 seeds give the lossless P and R\n",
+              built ? static_cast<double>(p_hits) / built : 0.0, static_cast<double>(r_hits) / truth_lanes,
+              lossless.lane_precision.value(), lossless.lane_recall.value(), same);
+  // Measured: 9 of 10 seeds give the lossless lanes (P 0.667 R 1); seed 7 (the live test's) loses
+  // the 120 m lane to the explorer at the lane's 3.5 m shift (docs/robustness.md): pooled P 0.633
+  // R 0.950. A graph that handled a lost pose or frame worse (skipped the frame, closed the road
+  // early or late) costs more seeds.
+  EXPECT_GE(same, 9u);
 }
 
 }  // namespace

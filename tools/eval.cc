@@ -4,7 +4,8 @@
 // precision/recall over (in lane, out lane) pairs and trajectory RMS, lane-graph precision/recall,
 // MapTR's Chamfer AP at 0.5/1.0/1.5 m, per-road detail, and (core/eval/regulatory.h) stop-line and
 // crosswalk precision/recall/position error, agreement of the rules at matched stop lines and
-// lane-change permission accuracy. Prints a summary; --json writes it all.
+// lane-change permission accuracy, and lane precision/recall per band of the map's per-lane
+// confidence (core/eval/confidence.h; JSON "confidence"). Prints a summary; --json writes it all.
 //
 //   lanemap-eval --truth groundtruth.osm --map lane_map.osm [--json report.json]
 //                [--driven scenario.json | --driven drive.lcmlog --osm roads.osm | --mapped-roads-only]
@@ -20,6 +21,7 @@
 // Both files are read in one ENU frame: the truth file's writer origin when its nodes carry
 // local_x/local_y (lanemap's files do), else its first node (see eval::lanelet2Origin).
 #include "core/eval/area.h"
+#include "core/eval/confidence.h"
 #include "core/eval/evaluate.h"
 #include "core/io/atomic_file.h"
 #include "core/io/lanelet2.h"
@@ -144,18 +146,22 @@ int main(int argc, char** argv) {
       truth = lanemap::eval::restrictToDriven(truth, area);
     }
     const auto report = lanemap::eval::evaluate(truth, built, options);
+    const auto bands = lanemap::eval::confidenceBands(report, built);  // lanemap's per-lane confidence
     if (!quiet) {
       std::printf("truth: %s (%zu lanelets%s)\nmap:   %s (%zu lanelets)\n", truth_path.c_str(), truth.lanelets.size(),
                   driven_path.empty() ? "" : (", " + std::to_string(driven_roads) + " driven roads" +
                                               (partial_roads ? " + " + std::to_string(partial_roads) + " as far as driven" : "")).c_str(),
                   map_path.c_str(), built.lanelets.size());
-      std::cout << lanemap::eval::summary(report) << std::flush;
+      std::cout << lanemap::eval::summary(report);
+      if (bands.unrated < report.built_lanes.size()) std::cout << lanemap::eval::summary(bands);
+      std::cout << std::flush;
     }
     if (!json_path.empty()) {
       nlohmann::json j = lanemap::eval::toJson(report);
       j["truth"] = truth_path;
       j["map"] = map_path;
       j["origin"] = {{"lat", origin.lat}, {"lon", origin.lon}};
+      j["confidence"] = lanemap::eval::toJson(bands);  // lane P/R per confidence band
       j["scored_area"] = !driven_path.empty() ? "driven" : mapped_only ? "mapped_roads" : "whole_truth";
       if (!driven_path.empty()) {
         j["driven_roads"] = driven_roads;    // to their end intersection

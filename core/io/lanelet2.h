@@ -6,7 +6,8 @@
 //
 // Conventions (see also writeLanelet2/readLanelet2 below):
 // - lanemap's own metadata (a lanelet's kind, road_id, from/to node, intersection id, lane index,
-//   stop line) and the mm-precise ENU coordinates of the nodes are not in the OSM file but in a
+//   stop line, "partial": {station_m, road_length_m} on a road mapped as far as a drive went,
+//   "confidence" of the lane) and the mm-precise ENU coordinates of the nodes are not in the OSM file but in a
 //   sidecar beside it: MAP.osm -> MAP.lanemap.json (lanelet2SidecarPath), keyed by lanelet id and
 //   bound to the OSM file by the FNV-1a hash of its bytes. readLanelet2 uses it transparently;
 //   a copy of the OSM file under another name in the same folder finds its sidecar by the hash.

@@ -493,6 +493,10 @@ class Lanelet2Reader {
       ll.index_from_left = j.at("index_from_left").get<int>();
       ll.turn = j.contains("turn") ? turnOf(j.at("turn").get<std::string>()) : TurnDirection::kNone;
       if (j.contains("stop_line")) rl.stop_way = j.at("stop_line").get<int64_t>();
+      if (j.contains("partial")) {
+        ll.partial = map::PartialRoad{j.at("partial").at("station_m").get<double>(), j.at("partial").at("road_length_m").get<double>()};
+      }
+      if (j.contains("confidence")) ll.confidence = j.at("confidence").get<double>();
     } catch (const std::exception& e) {
       throw Lanelet2Error("malformed lanemap sidecar '" + sidecar_->path + "' of '" + path_ + "': " + where + e.what());
     }

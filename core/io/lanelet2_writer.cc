@@ -464,6 +464,10 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
     j["index_from_left"] = ll.index_from_left;
     if (ll.turn != TurnDirection::kNone) j["turn"] = turnTag(ll.turn);
     if (ll.stop_line_id) j["stop_line"] = ids.way_of_line.at(*ll.stop_line_id);
+    // A road mapped as far as a drive went (issue 14) and the lane's confidence: lanemap's own,
+    // here rather than as tags Lanelet2's validator would call unknown.
+    if (ll.partial) j["partial"] = {{"station_m", ll.partial->station_m}, {"road_length_m", ll.partial->road_length_m}};
+    if (ll.confidence) j["confidence"] = *ll.confidence;
     lanelets_json[std::to_string(rel_id)] = std::move(j);
   }
 

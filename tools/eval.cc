@@ -4,19 +4,24 @@
 // precision/recall over (in lane, out lane) pairs and trajectory RMS, lane-graph precision/recall,
 // MapTR's Chamfer AP at 0.5/1.0/1.5 m, per-road detail, and (core/eval/regulatory.h) stop-line and
 // crosswalk precision/recall/position error, agreement of the rules at matched stop lines and
-// lane-change permission accuracy. Prints a summary; --json writes it all.
+// lane-change permission accuracy, and lane precision/recall per band of the map's per-lane
+// confidence (core/eval/confidence.h; JSON "confidence"). Prints a summary; --json writes it all.
 //
 //   lanemap-eval --truth groundtruth.osm --map lane_map.osm [--json report.json]
 //                [--driven scenario.json | --driven drive.lcmlog --osm roads.osm | --mapped-roads-only]
 //
 // --driven scores the roads the car drove to their end intersection (and the junction connections
-// between them): a driven road the map has no lanes on counts as missed. The route comes from
+// between them): a driven road the map has no lanes on counts as missed. The road the drive ended
+// on counts as far as the car drove it (core/eval/area.h restrictToDriven: its truth cut across
+// the road at the car's last position), so lanes mapped there as far as driven are scored, not
+// counted against precision. The route comes from
 // lanemap-sim's scenario.json, or, for a recording scored against a surveyed map, from the log's
 // POSE map-matched to the OSM by the road tracker (the same as the live graph's road tracker).
 //
 // Both files are read in one ENU frame: the truth file's writer origin when its nodes carry
 // local_x/local_y (lanemap's files do), else its first node (see eval::lanelet2Origin).
 #include "core/eval/area.h"
+#include "core/eval/confidence.h"
 #include "core/eval/evaluate.h"
 #include "core/io/atomic_file.h"
 #include "core/io/lanelet2.h"
@@ -36,6 +41,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -44,9 +50,10 @@
 namespace {
 
 // The roads a recorded drive closed: its POSE channel through the road tracker on the OSM's
-// skeleton; every kReachedIntersection closes the road it ends.
-std::set<lanemap::eval::RoadKey> drivenRoadsFromLog(const std::string& log_path, const std::string& osm_path,
-                                                    const std::string& tracker_config) {
+// skeleton; every kReachedIntersection closes the road it ends. The road entered and not closed
+// when the log ends is the partial one, driven to the last pose (moved into `frame`).
+lanemap::eval::DrivenArea drivenRoadsFromLog(const std::string& log_path, const std::string& osm_path,
+                                             const std::string& tracker_config, const lanemap::geo::LocalFrame& frame) {
   using namespace lanemap;
   if (osm_path.empty()) throw std::runtime_error("--driven with an LCM log needs --osm (the road network it drove)");
   const RoadTrackerSettings settings = RoadTrackerSettings::fromYamlFile(tracker_config);  // its map block too
@@ -54,18 +61,32 @@ std::set<lanemap::eval::RoadKey> drivenRoadsFromLog(const std::string& log_path,
   tracking::RoadTracker tracker(sk, settings.tracker);
   lcm::LogFile log(log_path, "r");
   if (!log.good()) throw std::runtime_error("cannot read LCM log: " + log_path);
-  std::set<eval::RoadKey> out;
+  eval::DrivenArea out;
   size_t poses = 0;
+  std::optional<eval::RoadKey> open;  // entered, not closed
+  std::optional<Eigen::Vector3d> last;
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
     if (ev->channel != channels::kPose) continue;
     pose_t m;
     if (m.decode(ev->data, 0, static_cast<int>(ev->datalen)) < 0) continue;
     ++poses;
-    for (const auto& e : tracker.update(toPoseInput(toEnuPose(m, sk.frame())))) {
-      if (e.type == tracking::RoadEventType::kReachedIntersection) out.insert({e.from_node, e.to_node});
+    const EnuPose p = toEnuPose(m, sk.frame());
+    if (p.position.allFinite()) last = p.position;
+    for (const auto& e : tracker.update(toPoseInput(p))) {
+      switch (e.type) {
+        case tracking::RoadEventType::kEnteredRoad: open = eval::RoadKey{e.from_node, e.to_node}; break;
+        case tracking::RoadEventType::kReachedIntersection:
+          out.roads.insert({e.from_node, e.to_node});
+          open.reset();
+          break;
+        case tracking::RoadEventType::kLeftMap:
+        case tracking::RoadEventType::kPoseLost: open.reset(); break;
+        default: break;
+      }
     }
   }
   if (poses == 0) throw std::runtime_error(log_path + ": no " + std::string(channels::kPose) + " message");
+  if (open && last) out.partial.push_back({*open, frame.toEnu(sk.frame().toWgs84(*last)).head<2>()});
   return out;
 }
 
@@ -113,29 +134,39 @@ int main(int argc, char** argv) {
     const lanemap::geo::LatLonAlt origin = lanemap::eval::lanelet2Origin(truth_path);
     auto truth = lanemap::io::readLanelet2(truth_path, origin.lat, origin.lon, ro);
     const auto built = lanemap::io::readLanelet2(map_path, origin.lat, origin.lon, ro);
-    size_t driven_roads = 0;
+    size_t driven_roads = 0, partial_roads = 0;
     if (mapped_only) truth = lanemap::eval::restrictToMappedRoads(truth, built);
     if (!driven_path.empty()) {
       const bool json = std::filesystem::path(driven_path).extension() == ".json";
-      const auto roads = json ? lanemap::eval::drivenRoadsFromScenario(driven_path)
-                              : drivenRoadsFromLog(driven_path, osm_path, lanemap::resolveShippedFile(tracker_config));
-      driven_roads = roads.size();
-      truth = lanemap::eval::restrictToRoads(truth, roads);
+      const lanemap::geo::LocalFrame frame(origin);
+      const auto area = json ? lanemap::eval::drivenAreaFromScenario(driven_path, frame)
+                             : drivenRoadsFromLog(driven_path, osm_path, lanemap::resolveShippedFile(tracker_config), frame);
+      driven_roads = area.roads.size();
+      partial_roads = area.partial.size();
+      truth = lanemap::eval::restrictToDriven(truth, area);
     }
     const auto report = lanemap::eval::evaluate(truth, built, options);
+    const auto bands = lanemap::eval::confidenceBands(report, built);  // lanemap's per-lane confidence
     if (!quiet) {
       std::printf("truth: %s (%zu lanelets%s)\nmap:   %s (%zu lanelets)\n", truth_path.c_str(), truth.lanelets.size(),
-                  driven_path.empty() ? "" : (", " + std::to_string(driven_roads) + " driven roads").c_str(),
+                  driven_path.empty() ? "" : (", " + std::to_string(driven_roads) + " driven roads" +
+                                              (partial_roads ? " + " + std::to_string(partial_roads) + " as far as driven" : "")).c_str(),
                   map_path.c_str(), built.lanelets.size());
-      std::cout << lanemap::eval::summary(report) << std::flush;
+      std::cout << lanemap::eval::summary(report);
+      if (bands.unrated < report.built_lanes.size()) std::cout << lanemap::eval::summary(bands);
+      std::cout << std::flush;
     }
     if (!json_path.empty()) {
       nlohmann::json j = lanemap::eval::toJson(report);
       j["truth"] = truth_path;
       j["map"] = map_path;
       j["origin"] = {{"lat", origin.lat}, {"lon", origin.lon}};
+      j["confidence"] = lanemap::eval::toJson(bands);  // lane P/R per confidence band
       j["scored_area"] = !driven_path.empty() ? "driven" : mapped_only ? "mapped_roads" : "whole_truth";
-      if (!driven_path.empty()) j["driven_roads"] = driven_roads;
+      if (!driven_path.empty()) {
+        j["driven_roads"] = driven_roads;    // to their end intersection
+        j["partial_roads"] = partial_roads;  // the road the drive ended on, scored as far as driven
+      }
       lanemap::io::writeFileAtomically(json_path, j.dump(2) + "\n");
       if (!quiet) std::printf("wrote %s\n", json_path.c_str());
     }

@@ -25,6 +25,12 @@
 // (`intersections:`, config/intersections.yaml), as the lane mapper reads them; --tracker-config
 // and --bev-config are the road tracker's and the BEV builder's files. --osm is required here.
 //
+// The road being driven when a log ends never closed: it is explored on what was driven, as far as
+// the car's last pose (core/mapping/partial_road.h), and its lanelets are tagged partial with that
+// station and the road's length (the map's sidecar and GeoJSON; summary.json roads[].partial). Its
+// grid is kept in bev/partial/; a later --log that closes the road merges that evidence (aligned)
+// and explores it again, complete (drives[].merged[].completed_partial).
+//
 // One road's trouble never costs the map: a road whose exploration fails is named on stderr and in
 // summary.json (roads_failed, with the reason), and every other road is still mapped.
 #include "core/bev/bev_align.h"
@@ -40,7 +46,9 @@
 #include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
 #include "core/lanes/options.h"
+#include "core/mapping/lane_confidence.h"
 #include "core/mapping/map_assembler.h"
+#include "core/mapping/partial_road.h"
 #include "core/osm/osm_data.h"
 #include "core/seg/segmenter.h"
 #include "core/skeleton/skeleton.h"
@@ -133,6 +141,7 @@ class OfflineMapper {
   // when the road closes, merged aligned into what the earlier drives gave (bev::mergeAligned).
   void startDrive() {
     tracker_ = std::make_unique<tracking::RoadTracker>(sk_, c_.tracker.tracker);
+    last_position_.reset();
     builder_ = std::make_unique<bev::BevBuilder>(sk_, c_.vehicle.camera, bevOptions(o_, c_));
     drive_log_ = nlohmann::json::array();
   }
@@ -180,9 +189,12 @@ class OfflineMapper {
     mapClosedRoads();
   }
 
+  // End of the drive's log: roads still closing are handed over, and the road being driven is
+  // mapped as far as it was driven.
   void finish() {
     builder_->finish();
     mapClosedRoads();
+    mapPartialRoad();
   }
 
   const mapping::MapAssembler& assembler() const { return assembler_; }
@@ -191,6 +203,8 @@ class OfflineMapper {
   int64_t framesFailed() const { return frames_failed_; }
   // Per road explored: lanes found, or why it failed.
   const nlohmann::json& roadLog() const { return road_log_; }
+  // Roads a drive ended on too early to map (under min_lane_length_m past their start), with why.
+  const nlohmann::json& partialNotMapped() const { return partial_not_mapped_; }
   int roadsFailed() const { return roads_failed_; }
   int64_t framesProjected() const { return frames_projected_; }
   int64_t framesMesh() const { return frames_mesh_; }
@@ -206,6 +220,7 @@ class OfflineMapper {
 
   void onPose(const pose_t& m) {
     const EnuPose p = toEnuPose(m, sk_.frame());
+    if (p.position.allFinite()) last_position_ = p.position.head<2>();
     builder_->addPose(toTimedPose(p));
     for (const auto& e : tracker_->update(toPoseInput(p))) {
       switch (e.type) {
@@ -219,41 +234,113 @@ class OfflineMapper {
   }
 
   void mapClosedRoads() {
-    for (auto& road : builder_->takeClosed()) {
-      // A road driven again: its grid accumulates, and it is explored again on everything seen.
-      auto [it, fresh] = drive_grids_.try_emplace(road.road_id, road.grid);
-      if (!fresh) bev::mergeGrid(road.grid, it->second);
-      const bev::BevGrid* grid = &it->second;
-      if (const auto prior = prior_.find(road.road_id); prior != prior_.end()) {  // driven in an earlier drive
-        bev::BevGrid fused = prior->second;
-        const bev::Alignment a = bev::mergeAligned(it->second, fused, !o_.no_align);
-        drive_log_.push_back({{"road_id", road.road_id}, {"traversals_before", traversals_[road.road_id]},
-                              {"aligned", a.ok}, {"shift_m", {a.shift_m.x(), a.shift_m.y()}},
-                              {"correlation", a.correlation}, {"overlap_cells", a.overlap_cells}, {"why", a.why}});
-        grid = &(fused_[road.road_id] = std::move(fused));
-      }
-      grid->save(bev::roadGridPath(o_.out, road.road_id));
-      const auto* r = sk_.road(road.road_id);
-      if (!r) continue;
-      nlohmann::json entry = {{"road_id", road.road_id}, {"from", r->from}, {"to", r->to}, {"drive", drives_}};
-      try {
-        const auto res = lanes::exploreRoad(*grid, lanes::RoadGeometry::fromSkeleton(*r), explorer_);
-        const auto& origin = sk_.frame().origin();
-        map::LaneMap lanes_of_road = lanes::toLaneMap(res, origin.lat, origin.lon, origin.alt);
-        lanes::addStopLines(*grid, lanes_of_road);  // stop lines the BEV saw at the lanes' ends
-        crosswalks_[road.road_id] = lanes::findCrosswalks(*grid, lanes_of_road, 1);
-        assembler_.setRoad(road.road_id, std::move(lanes_of_road));
-        ++roads_mapped_;
-        entry["lanes"] = res.lanes.size();
-        if (!o_.quiet) std::fprintf(stderr, "\rlanemap-offline: road %lld: %zu lanes%20s\n", static_cast<long long>(road.road_id), res.lanes.size(), "");
-      } catch (const std::exception& e) {
-        // The road keeps its BEV (bev/road_<id>.bev) and its previous lanes, if any.
-        ++roads_failed_;
-        entry["error"] = e.what();
-        std::fprintf(stderr, "\rlanemap-offline: road %lld failed, the rest is mapped: %s\n", static_cast<long long>(road.road_id), e.what());
-      }
-      road_log_.push_back(std::move(entry));
+    for (auto& road : builder_->takeClosed()) mapTraversal(road);
+  }
+
+  // A traversal of a road that is (now) complete: this drive's evidence of the road accumulates,
+  // it is aligned onto the earlier drives' (an earlier drive's partial evidence of the road
+  // included: the road is complete now), and the road is explored again on everything seen.
+  void mapTraversal(const bev::RoadBev& road) {
+    auto [it, fresh] = drive_grids_.try_emplace(road.road_id, road.grid);
+    if (!fresh) bev::mergeGrid(road.grid, it->second);
+    const bev::BevGrid* grid = &it->second;
+    bool completed_partial = false;
+    if (auto p = partial_.find(road.road_id); p != partial_.end() && !prior_.count(road.road_id)) {
+      prior_[road.road_id] = std::move(p->second.grid);  // an earlier drive ended on it: its evidence, aligned below
+      traversals_[road.road_id] = p->second.traversals;
+      partial_.erase(p);
+      std::error_code ec;
+      fs::remove(bev::partialGridPath(o_.out, road.road_id), ec);
+      completed_partial = true;
     }
+    if (const auto prior = prior_.find(road.road_id); prior != prior_.end()) {  // driven in an earlier drive
+      bev::BevGrid fused = prior->second;
+      const bev::Alignment a = bev::mergeAligned(it->second, fused, !o_.no_align);
+      drive_log_.push_back({{"road_id", road.road_id}, {"traversals_before", traversals_[road.road_id]},
+                            {"aligned", a.ok}, {"shift_m", {a.shift_m.x(), a.shift_m.y()}},
+                            {"correlation", a.correlation}, {"overlap_cells", a.overlap_cells}, {"why", a.why},
+                            {"completed_partial", completed_partial}});
+      grid = &(fused_[road.road_id] = std::move(fused));
+    }
+    grid->save(bev::roadGridPath(o_.out, road.road_id));
+    exploreAndSet(road.road_id, *grid, std::nullopt);
+  }
+
+  // After the log: the road the car is on (opened, never closed) explored as far as the last pose.
+  // A road complete already (this drive or an earlier one closed it) takes the traversal as any
+  // other; otherwise the road is partial: its evidence (with an earlier drive's partial evidence of
+  // it, aligned) waits in partial_ for a drive that closes it.
+  void mapPartialRoad() {
+    std::optional<bev::RoadBev> open;
+    builder_->withOpenRoad([&](const bev::RoadBev& r) {
+      if (r.grid.frames() > 0) open = r;  // a copy
+    });
+    if (!open || !last_position_) return;
+    const auto* r = sk_.road(open->road_id);
+    if (!r) return;
+    if (drive_grids_.count(r->id) || prior_.count(r->id)) {
+      mapTraversal(*open);
+      return;
+    }
+    const double station = mapping::roadStation(*r, *last_position_, explorer_);
+    auto [it, fresh] = partial_.try_emplace(r->id, Partial{open->grid, station, 1});
+    if (!fresh) {  // another drive ended on it too
+      const bev::Alignment a = bev::mergeAligned(open->grid, it->second.grid, !o_.no_align);
+      drive_log_.push_back({{"road_id", r->id}, {"traversals_before", it->second.traversals}, {"aligned", a.ok},
+                            {"shift_m", {a.shift_m.x(), a.shift_m.y()}}, {"correlation", a.correlation},
+                            {"overlap_cells", a.overlap_cells}, {"why", a.why}, {"partial", true}});
+      it->second.station_m = std::max(it->second.station_m, station);
+      ++it->second.traversals;
+    }
+    fs::create_directories(fs::path(bev::partialGridPath(o_.out, r->id)).parent_path());
+    it->second.grid.save(bev::partialGridPath(o_.out, r->id));
+    exploreAndSet(r->id, it->second.grid,
+                  map::PartialRoad{it->second.station_m, mapping::roadFrameLength(*r, explorer_)});
+  }
+
+  // Explores one road's evidence (as far as partial->station_m when given) and sets its lanes.
+  void exploreAndSet(int64_t road_id, const bev::BevGrid& grid, const std::optional<map::PartialRoad>& partial) {
+    const auto* r = sk_.road(road_id);
+    if (!r) return;
+    nlohmann::json entry = {{"road_id", road_id}, {"from", r->from}, {"to", r->to}, {"drive", drives_}};
+    if (partial) entry["partial"] = {{"station_m", partial->station_m}, {"road_length_m", partial->road_length_m}};
+    try {
+      const auto geometry = partial ? mapping::drivenStretch(*r, partial->station_m, explorer_) : lanes::RoadGeometry::fromSkeleton(*r);
+      const auto res = lanes::exploreRoad(grid, geometry, explorer_);
+      const auto& origin = sk_.frame().origin();
+      map::LaneMap lanes_of_road = lanes::toLaneMap(res, origin.lat, origin.lon, origin.alt);
+      mapping::setConfidence(lanes_of_road, res, mapping::laneConfidences(grid, res, explorer_));
+      if (partial) {
+        mapping::markPartial(lanes_of_road, *partial);  // its lanes end where the car stopped: no stop line there
+      } else {
+        lanes::addStopLines(grid, lanes_of_road);  // stop lines the BEV saw at the lanes' ends
+      }
+      crosswalks_[road_id] = lanes::findCrosswalks(grid, lanes_of_road, 1);
+      assembler_.setRoad(road_id, std::move(lanes_of_road));
+      ++roads_mapped_;
+      entry["lanes"] = res.lanes.size();
+      if (!o_.quiet) {
+        std::fprintf(stderr, "\rlanemap-offline: road %lld: %zu lanes%s%20s\n", static_cast<long long>(road_id), res.lanes.size(),
+                     partial ? (" (partial, to " + std::to_string(static_cast<int>(partial->station_m)) + " m of " +
+                                std::to_string(static_cast<int>(partial->road_length_m)) + " m)").c_str() : "", "");
+      }
+    } catch (const lanes::LanesError& e) {
+      if (!partial) return fail(road_id, entry, e);
+      // Too little of it driven: not mapped, and said; an earlier drive's lanes of it stay.
+      partial_not_mapped_.push_back({{"road_id", road_id}, {"why", e.what()}});
+      return;
+    } catch (const std::exception& e) {
+      return fail(road_id, entry, e);
+    }
+    road_log_.push_back(std::move(entry));
+  }
+
+  void fail(int64_t road_id, nlohmann::json& entry, const std::exception& e) {
+    // The road keeps its BEV (bev/road_<id>.bev) and its previous lanes, if any.
+    ++roads_failed_;
+    entry["error"] = e.what();
+    std::fprintf(stderr, "\rlanemap-offline: road %lld failed, the rest is mapped: %s\n", static_cast<long long>(road_id), e.what());
+    road_log_.push_back(std::move(entry));
   }
 
   const Options& o_;
@@ -268,6 +355,14 @@ class OfflineMapper {
   std::map<int64_t, bev::BevGrid> prior_;        // the earlier drives' fused evidence per road
   std::map<int64_t, int> traversals_;            // drives in prior_ per road
   std::map<int64_t, bev::BevGrid> fused_;        // prior_ + this drive, aligned (roads in both)
+  struct Partial {
+    bev::BevGrid grid;       // the evidence of the drives that ended on it (aligned)
+    double station_m = 0.0;  // the furthest any of them reached
+    int traversals = 0;
+  };
+  std::map<int64_t, Partial> partial_;            // roads drives ended on, none closed yet
+  std::optional<Eigen::Vector2d> last_position_;  // this drive's newest pose (ENU)
+  nlohmann::json partial_not_mapped_ = nlohmann::json::array();
   nlohmann::json drive_log_ = nlohmann::json::array();
   int drives_ = 0;
   int64_t frames_projected_ = 0, frames_mesh_ = 0;
@@ -387,6 +482,7 @@ int main(int argc, char** argv) {
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     nlohmann::json summary = {{"log", o.logs.front()}, {"labels", labels}, {"roads_mapped", mapper.roadsMapped()},
                               {"roads_failed", mapper.roadsFailed()}, {"roads", mapper.roadLog()},
+                              {"partial_not_mapped", mapper.partialNotMapped()},
                               {"intersections_failed", junction_failures},
                               {"lanelets", map.lanelets.size()}, {"frames_projected", mapper.framesProjected()},
                               {"stop_lines", std::count_if(map.lines.begin(), map.lines.end(), [](const auto& l) {

@@ -53,17 +53,26 @@ std::map<int64_t, std::string> roadFiles(const std::string& dir, const std::stri
   return out;
 }
 
-StoredRoad storeRoad(const std::string& store, const RoadBev& road, bool align) {
-  StoredRoad s;
-  s.path = roadGridPath(store, road.road_id);
-  io::createDirectories(std::filesystem::path(s.path).parent_path().string());
-  BevGrid grid = road.grid;
-  if (std::filesystem::exists(s.path)) {
-    grid = BevGrid::load(s.path);
-    s.alignment = mergeAligned(road.grid, grid, align);
-    s.merged = true;
+namespace {
+std::filesystem::path partialDir(const std::string& store) { return std::filesystem::path(store) / "bev" / "partial"; }
+std::filesystem::path partialMeta(const std::string& store, int64_t road_id) {
+  return partialDir(store) / ("road_" + std::to_string(road_id) + ".json");
+}
+nlohmann::json readJson(const std::filesystem::path& path) {
+  std::ifstream f(path);
+  if (!f) return nullptr;
+  return nlohmann::json::parse(f, nullptr, false);
+}
+// The grid first (a JSON without its grid is dropped by partialRoad), then the JSON.
+void removePartial(const std::string& store, int64_t road_id) {
+  for (const std::string& path : {partialGridPath(store, road_id), partialMeta(store, road_id).string()}) {
+    try {
+      io::removeFileDurably(path);
+    } catch (const io::IoError&) {
+    }
   }
-  grid.save(s.path);
+}
+void fillBox(StoredRoad& s, const BevGrid& grid) {
   const auto box = grid.cellBounds();
   s.resolution = grid.resolution();
   s.frames = grid.frames();
@@ -72,6 +81,95 @@ StoredRoad storeRoad(const std::string& store, const RoadBev& road, bool align) 
     s.width = box.sizes().x();
     s.height = box.sizes().y();
   }
+}
+}  // namespace
+
+std::string partialGridPath(const std::string& store, int64_t road_id) {
+  return (partialDir(store) / ("road_" + std::to_string(road_id) + ".bev")).string();
+}
+
+std::optional<PartialRoadInfo> partialRoad(const std::string& store, int64_t road_id) {
+  std::error_code ec;
+  const std::string grid = partialGridPath(store, road_id);
+  const auto meta_path = partialMeta(store, road_id);
+  if (!std::filesystem::exists(grid, ec)) {
+    if (std::filesystem::exists(meta_path, ec)) removePartial(store, road_id);  // a crash while removing it
+    return std::nullopt;
+  }
+  const nlohmann::json j = readJson(meta_path);
+  if (!j.is_object() || !j.contains("station_m") || !j["station_m"].is_number()) return std::nullopt;  // station unknown
+  if (j.contains("completed_into")) {
+    // storeRoad was merging it: when the road's grid is the one it was merged into, it is done.
+    const std::string road_grid = roadGridPath(store, road_id);
+    if (std::filesystem::exists(road_grid, ec) &&
+        std::to_string(gridHash(BevGrid::load(road_grid))) == j.value("completed_into", std::string())) {
+      removePartial(store, road_id);
+      return std::nullopt;
+    }
+  }
+  PartialRoadInfo p;
+  p.road_id = road_id;
+  p.path = grid;
+  p.station_m = j["station_m"].get<double>();
+  p.road_length_m = j.value("road_length_m", 0.0);
+  p.frames = j.value("frames", 0);
+  return p;
+}
+
+std::map<int64_t, PartialRoadInfo> partialRoads(const std::string& store) {
+  std::map<int64_t, PartialRoadInfo> out;
+  for (const auto& [id, path] : roadFiles(partialDir(store).string(), ".bev")) {
+    if (auto p = partialRoad(store, id)) out[id] = std::move(*p);
+  }
+  return out;
+}
+
+StoredRoad storeRoad(const std::string& store, const RoadBev& road, bool align) {
+  StoredRoad s;
+  s.path = roadGridPath(store, road.road_id);
+  io::createDirectories(std::filesystem::path(s.path).parent_path().string());
+  const auto partial = partialRoad(store, road.road_id);  // before the road's grid changes
+  BevGrid grid = road.grid;
+  if (std::filesystem::exists(s.path)) {
+    grid = BevGrid::load(s.path);
+    s.alignment = mergeAligned(road.grid, grid, align);
+    s.merged = true;
+  }
+  if (partial) {
+    // An earlier drive ended on this road: its evidence completes the road now.
+    s.partial_alignment = mergeAligned(BevGrid::load(partial->path), grid, align);
+    s.completed_partial = true;
+    nlohmann::json j = readJson(partialMeta(store, road.road_id));
+    j["completed_into"] = std::to_string(gridHash(grid));
+    io::writeFileAtomically(partialMeta(store, road.road_id).string(), j.dump() + "\n");
+  }
+  grid.save(s.path);
+  if (partial) removePartial(store, road.road_id);
+  fillBox(s, grid);
+  return s;
+}
+
+StoredRoad storePartialRoad(const std::string& store, const RoadBev& road, double station_m, double road_length_m,
+                            bool align) {
+  if (std::filesystem::exists(roadGridPath(store, road.road_id))) return storeRoad(store, road, align);  // complete already
+  StoredRoad s;
+  s.path = partialGridPath(store, road.road_id);
+  s.partial = true;
+  s.station_m = station_m;
+  s.road_length_m = road_length_m;
+  io::createDirectories(partialDir(store).string());
+  BevGrid grid = road.grid;
+  if (const auto earlier = partialRoad(store, road.road_id)) {  // another drive ended on it too
+    grid = BevGrid::load(earlier->path);
+    s.alignment = mergeAligned(road.grid, grid, align);
+    s.merged = true;
+    s.station_m = std::max(s.station_m, earlier->station_m);
+  }
+  grid.save(s.path);
+  const nlohmann::json meta{{"road_id", road.road_id}, {"station_m", s.station_m}, {"road_length_m", road_length_m},
+                            {"frames", grid.frames()}};
+  io::writeFileAtomically(partialMeta(store, road.road_id).string(), meta.dump() + "\n");
+  fillBox(s, grid);
   return s;
 }
 

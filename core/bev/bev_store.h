@@ -11,6 +11,15 @@
 // stored or given up. Each file is written atomically and durably (io::writeFileAtomically); a
 // crash or power loss at any moment leaves each file at its old or its new content, and
 // loadCheckpoints sorts out a pair caught between two steps (see storeCheckpoint).
+//
+// Partial roads (issue 14): the road the car is on when a drive ends never closes. Its grid goes
+// to <store>/bev/partial/road_<id>.bev with road_<id>.json beside it (the station reached along
+// the road, the road's length, the grid's hash): storePartialRoad. Two drives ending on one road
+// merge there (aligned, the further station kept). A later drive that closes the road completes
+// it: storeRoad merges the partial evidence into the road's grid (aligned) and removes the
+// partial files. Before the road's grid is saved the partial's JSON names the hash of the grid
+// that will hold it ("completed_into"), so a crash between saving and removing is recognised
+// (the stored grid has that hash) and the partial is not merged a second time.
 #pragma once
 
 #include "core/bev/bev_align.h"
@@ -20,6 +29,7 @@
 #include <Eigen/Core>
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,6 +47,21 @@ struct StoredRoad {
   int frames = 0;
   bool merged = false;   // the road was stored before: this traversal was merged into it
   Alignment alignment;   // the merge's (bev_align.h); !ok: merged unshifted, alignment.why says why
+  // storePartialRoad: the road is stored partial (path: its partial grid), driven to station_m of
+  // road_length_m. False when the road was complete already (the traversal joined its grid).
+  bool partial = false;
+  double station_m = 0.0, road_length_m = 0.0;
+  // storeRoad: a partial of the road (an earlier drive ended on it) was merged in and removed.
+  bool completed_partial = false;
+  Alignment partial_alignment;  // that merge's
+};
+
+// A partial road of the store: its grid and how far it was driven.
+struct PartialRoadInfo {
+  int64_t road_id = -1;
+  std::string path;  // the grid
+  double station_m = 0.0, road_length_m = 0.0;
+  int frames = 0;
 };
 
 std::string roadGridPath(const std::string& store, int64_t road_id);
@@ -46,7 +71,23 @@ std::map<int64_t, std::string> roadFiles(const std::string& dir, const std::stri
 // Writes (or merges into) the road's file; throws BevError / std::runtime_error on failure. A road
 // already stored gets the new traversal aligned to it first (bev::mergeAligned: both onto the
 // frame-weighted mean), unless `align` is false.
+// A partial of the road (storePartialRoad) is merged in as well (aligned when `align`) and
+// removed: the road is complete now.
 StoredRoad storeRoad(const std::string& store, const RoadBev& road, bool align = true);
+
+std::string partialGridPath(const std::string& store, int64_t road_id);
+// Stores the road a drive ended on, driven to station_m (arc length along the road) of
+// road_length_m: into its partial grid (merged, aligned, into one already there; the station is the
+// further one). A road already complete in the store gets the traversal merged into its grid as
+// storeRoad does (the result is not partial). Throws like storeRoad.
+StoredRoad storePartialRoad(const std::string& store, const RoadBev& road, double station_m, double road_length_m,
+                            bool align = true);
+// The road's partial (nullopt: none, or one already merged into the road's grid by a storeRoad a
+// crash cut short, which is removed now). A grid without its JSON (a crash between the two) is no
+// partial: its station is unknown.
+std::optional<PartialRoadInfo> partialRoad(const std::string& store, int64_t road_id);
+// Every partial road of the store, by road id.
+std::map<int64_t, PartialRoadInfo> partialRoads(const std::string& store);
 
 struct Checkpoint {
   int64_t road_id = -1;

@@ -2,7 +2,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
 #include <stdexcept>
 
 namespace lanemap::eval {
@@ -98,6 +104,173 @@ std::set<RoadKey> drivenRoadsFromScenario(const std::string& path) {
     out.insert({r["from"].get<int64_t>(), r["to"].get<int64_t>()});
   }
   return out;
+}
+
+namespace {
+
+// The line across the road through `end`, direction `t`: a point is past it when ahead of it and
+// within `side_m` of `end` sideways.
+struct Cut {
+  Eigen::Vector2d end, t;
+  double side_m = 15.0;
+  double ahead(const Eigen::Vector3d& p) const { return (p.head<2>() - end).dot(t); }
+  bool past(const Eigen::Vector3d& p) const {
+    const Eigen::Vector2d v = p.head<2>() - end;
+    return v.dot(t) > 0.0 && std::abs(t.x() * v.y() - t.y() * v.x()) < side_m;
+  }
+  // The part of `pts` before the cut in the road's direction (a polyline stored against it is cut
+  // from its other end); *cut_off: whether anything was cut off.
+  std::vector<Eigen::Vector3d> before(std::vector<Eigen::Vector3d> pts, bool* cut_off) const {
+    *cut_off = false;
+    if (pts.size() < 2) return pts;
+    const bool reversed = (pts.back() - pts.front()).head<2>().dot(t) < 0.0;
+    if (reversed) std::reverse(pts.begin(), pts.end());
+    std::vector<Eigen::Vector3d> out;
+    for (size_t i = 0; i < pts.size(); ++i) {
+      if (past(pts[i])) {
+        *cut_off = true;
+        if (i > 0) {
+          const double a0 = ahead(pts[i - 1]), a1 = ahead(pts[i]);
+          const double f = a0 < a1 ? std::clamp(-a0 / (a1 - a0), 0.0, 1.0) : 0.0;
+          const Eigen::Vector3d q = pts[i - 1] + f * (pts[i] - pts[i - 1]);
+          if (out.empty() || (q - out.back()).norm() > 1e-6) out.push_back(q);
+        }
+        break;
+      }
+      out.push_back(pts[i]);
+    }
+    if (reversed) std::reverse(out.begin(), out.end());
+    return out;
+  }
+};
+
+}  // namespace
+
+map::LaneMap cutRoadAt(const map::LaneMap& truth, const RoadKey& road, const Eigen::Vector2d& end) {
+  map::LaneMap out = truth;
+  auto onRoad = [&](const map::Lanelet& l) {
+    return l.kind == map::LaneletKind::kRoad && l.from_node == road.first && l.to_node == road.second;
+  };
+  // The road's direction at `end`: the nearest segment of its centre lines.
+  double best = std::numeric_limits<double>::infinity();
+  Cut cut{end, Eigen::Vector2d::Zero()};
+  for (const auto& l : truth.lanelets) {
+    if (!onRoad(l)) continue;
+    for (size_t i = 0; i + 1 < l.centre.size(); ++i) {
+      const Eigen::Vector2d a = l.centre[i].head<2>(), b = l.centre[i + 1].head<2>();
+      const Eigen::Vector2d ab = b - a;
+      if (ab.norm() < 1e-9) continue;
+      const double f = std::clamp((end - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+      const double d = (a + f * ab - end).norm();
+      if (d < best) {
+        best = d;
+        cut.t = ab.normalized();
+      }
+    }
+  }
+  if (!std::isfinite(best)) return out;  // the truth has no lanes on the road
+  int64_t next_id = 1;
+  for (const auto& l : truth.lines) next_id = std::max(next_id, l.id + 1);
+  for (const auto& l : truth.lanelets) next_id = std::max(next_id, l.id + 1);
+  for (const auto& r : truth.regulatory_elements) next_id = std::max(next_id, r.id + 1);
+  for (const auto& c : truth.crosswalks) next_id = std::max(next_id, c.id + 1);
+  std::map<int64_t, int64_t> cut_line;  // original bound -> its cut copy (one per bound)
+  std::set<int64_t> dropped, road_lanelets;
+  std::vector<map::Lanelet> kept;
+  for (auto l : out.lanelets) {
+    if (!onRoad(l)) {
+      kept.push_back(std::move(l));
+      continue;
+    }
+    road_lanelets.insert(l.id);
+    bool centre_cut = false;
+    l.centre = cut.before(l.centre, &centre_cut);
+    const map::LineString* left = truth.line(l.left_id);
+    const map::LineString* right = truth.line(l.right_id);
+    bool ok = l.centre.size() >= 2 && left && right;
+    for (const map::LineString* b : {left, right}) {
+      if (!ok) break;
+      bool b_cut = false;
+      auto pts = cut.before(b->points, &b_cut);
+      if (pts.size() < 2) ok = false;
+      if (!ok || !b_cut) continue;
+      auto [it, fresh] = cut_line.try_emplace(b->id, next_id);
+      if (fresh) {
+        map::LineString copy = *b;
+        copy.id = next_id++;
+        copy.points = std::move(pts);
+        out.lines.push_back(std::move(copy));
+      }
+      (b == left ? l.left_id : l.right_id) = it->second;
+    }
+    if (!ok) {
+      dropped.insert(l.id);
+      continue;
+    }
+    if (centre_cut) {  // it ends where the car stopped now: no successor, no stop line there
+      l.successors.clear();
+      l.stop_line_id.reset();
+    }
+    kept.push_back(std::move(l));
+  }
+  out.lanelets = std::move(kept);
+  // Crosswalks past the cut no longer cross the road's lanes.
+  for (auto& c : out.crosswalks) {
+    Eigen::Vector3d mid = Eigen::Vector3d::Zero();
+    for (const auto& p : c.left) mid += p;
+    for (const auto& p : c.right) mid += p;
+    const size_t n = c.left.size() + c.right.size();
+    const bool past = n > 0 && cut.past(mid / static_cast<double>(n));
+    c.crossing.erase(std::remove_if(c.crossing.begin(), c.crossing.end(),
+                                    [&](int64_t id) { return dropped.count(id) || (past && road_lanelets.count(id)); }),
+                     c.crossing.end());
+  }
+  return out;
+}
+
+map::LaneMap restrictToDriven(const map::LaneMap& truth, const DrivenArea& area) {
+  map::LaneMap cut = truth;
+  std::set<RoadKey> roads = area.roads;
+  for (const auto& p : area.partial) {
+    if (area.roads.count(p.road)) continue;  // driven to its end another time
+    cut = cutRoadAt(cut, p.road, p.end);
+    roads.insert(p.road);
+  }
+  return restrictToRoads(cut, roads);
+}
+
+DrivenArea drivenAreaFromScenario(const std::string& path, const geo::LocalFrame& frame) {
+  DrivenArea area;
+  area.roads = drivenRoadsFromScenario(path);
+  std::ifstream in(path);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  const auto& route = j["route"];
+  if (route.empty() || !route.back().contains("left_utime") || !route.back()["left_utime"].is_null()) return area;
+  // The car's last position: trajectory.csv's last row (t_s,utime,east_m,north_m,up_m,...).
+  std::ifstream csv(std::filesystem::path(path).parent_path() / "trajectory.csv");
+  std::string line, last;
+  while (std::getline(csv, line)) {
+    if (!line.empty() && line[0] != 't') last = line;
+  }
+  if (last.empty() || !j.contains("origin")) return area;
+  std::vector<double> v;
+  std::stringstream ss(last);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      v.push_back(std::stod(item));
+    } catch (const std::exception&) {
+      v.push_back(std::nan(""));
+    }
+  }
+  if (v.size() < 5 || !std::isfinite(v[2]) || !std::isfinite(v[3])) {
+    throw std::runtime_error(path + ": trajectory.csv's last row is not t_s,utime,east_m,north_m,up_m,...");
+  }
+  const auto& o = j["origin"];
+  const geo::LocalFrame scenario_frame({o.at("lat").get<double>(), o.at("lon").get<double>(), o.value("alt", 0.0)});
+  const Eigen::Vector3d p = frame.toEnu(scenario_frame.toWgs84(Eigen::Vector3d(v[2], v[3], v[4])));
+  area.partial.push_back({{route.back()["from"].get<int64_t>(), route.back()["to"].get<int64_t>()}, p.head<2>()});
+  return area;
 }
 
 }  // namespace lanemap::eval

@@ -7,16 +7,25 @@
 // - restrictToDrivenRoads (lanemap-eval --driven): the roads the car drove to their end
 //   intersection, from the drive's route (drivenRoads*). A driven road the map has no lanes on
 //   still counts: its true lanes are missed (recall), which restrictToMappedRoads cannot see.
+// - The road the drive ended on (issue 14) was driven from its start to where the car stopped:
+//   restrictToDriven keeps its truth lanelets cut there (the line across the road through the
+//   car's last position), so a map that has it as far as driven (lanemap's partial lanes) is
+//   scored on what the car could see, and one without it misses those lanes. Dropping the road
+//   (as restrictToRoads alone does) would count a partial road's lanes against precision.
 // - restrictToMappedRoads (lanemap-eval --mapped-roads-only): the roads the built map has lanes
 //   on; optimistic, a road the mapper dropped does not count against it.
 #pragma once
 
+#include "core/geo/local_frame.h"
 #include "core/map/lane_map.h"
+
+#include <Eigen/Core>
 
 #include <cstdint>
 #include <set>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace lanemap::eval {
 
@@ -37,5 +46,32 @@ std::set<RoadKey> mappedRoads(const map::LaneMap& built);
 // was not closed and is not counted). Throws std::runtime_error naming the file on a missing file
 // or a file without a route.
 std::set<RoadKey> drivenRoadsFromScenario(const std::string& scenario_json_path);
+
+// A road driven from its start to `end` (ENU of the frame the truth is read in), where the drive
+// ended.
+struct PartialDrive {
+  RoadKey road{-1, -1};
+  Eigen::Vector2d end = Eigen::Vector2d::Zero();
+};
+struct DrivenArea {
+  std::set<RoadKey> roads;              // driven to their end intersection
+  std::vector<PartialDrive> partial;    // the road the drive ended on (none when it ended in a junction)
+};
+
+// drivenRoadsFromScenario, and the road the drive ended on (the route's entry with left_utime
+// null) with the car's last position: the last row of trajectory.csv beside scenario.json (ENU of
+// the scenario's "origin"), moved into `frame`. Without trajectory.csv there is no partial road.
+DrivenArea drivenAreaFromScenario(const std::string& scenario_json_path, const geo::LocalFrame& frame);
+
+// The truth's lanelets of `road` cut at the line across the road through `end` (the part before
+// it kept; a lanelet wholly past it dropped, a stop line past it dropped). The road's direction at
+// `end` is that of the nearest of its truth centre lines; a point past the line and within
+// 15 m of `end` sideways is past the cut (a road bending back further away is not cut). The cut
+// bounds are copies under fresh ids (a bound shared with another road stays whole for it).
+map::LaneMap cutRoadAt(const map::LaneMap& truth, const RoadKey& road, const Eigen::Vector2d& end);
+
+// restrictToRoads of the roads driven to their end and the partial ones, the partial ones cut at
+// where the car stopped (cutRoadAt); crosswalks past the cut are dropped with the lanes there.
+map::LaneMap restrictToDriven(const map::LaneMap& truth, const DrivenArea& area);
 
 }  // namespace lanemap::eval

@@ -2,7 +2,7 @@
 #include "core/intersections/intersections.h"
 
 #include "core/config/yaml_reader.h"
-#include "core/io/lanelet2.h"
+#include "core/io/lanelet2_orientation.h"
 
 #include <algorithm>
 #include <cmath>

@@ -44,6 +44,15 @@ std::vector<Eigen::Vector3d> laneletRing(const map::LaneMap& map, const map::Lan
   return ring;
 }
 
+// A partial road's lanelet (mapped as far as the drive went): partial, and where it stops; the
+// lane's confidence (null when the map has none).
+void addPartial(json& props, const map::Lanelet& ll) {
+  props["partial"] = ll.partial.has_value();
+  props["partial_station_m"] = ll.partial ? json(ll.partial->station_m) : json(nullptr);
+  props["road_length_m"] = ll.partial ? json(ll.partial->road_length_m) : json(nullptr);
+  props["confidence"] = ll.confidence ? json(*ll.confidence) : json(nullptr);
+}
+
 const char* kindName(map::LaneletKind k) {
   return k == map::LaneletKind::kIntersection ? "intersection" : "road";
 }
@@ -69,6 +78,7 @@ nlohmann::json toGeoJson(const map::LaneMap& map) {
                {"left_id", ll.left_id},
                {"right_id", ll.right_id},
                {"stop_line_id", ll.stop_line_id ? json(*ll.stop_line_id) : json(nullptr)}};
+    addPartial(props, ll);
     json geometry{{"type", "Polygon"},
                   {"coordinates", json::array({positions(frame, ring)})}};
     features.push_back(feature(std::move(geometry), std::move(props)));
@@ -81,6 +91,7 @@ nlohmann::json toGeoJson(const map::LaneMap& map) {
                {"road_id", ll.road_id},
                {"index_from_left", ll.index_from_left},
                {"turn", map::toString(ll.turn)}};
+    addPartial(props, ll);
     json geometry{{"type", "LineString"}, {"coordinates", positions(frame, ll.centre)}};
     features.push_back(feature(std::move(geometry), std::move(props)));
   }

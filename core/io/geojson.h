@@ -15,9 +15,12 @@ namespace lanemap::io {
 // - per lanelet, a Polygon (exterior ring counter-clockwise, closed) with properties
 //   feature="lanelet", id, kind ("road"/"intersection"), road_id, from_node, to_node,
 //   intersection_id, index_from_left, turn ("none"/"straight"/"left"/"right"), successors (ids),
-//   left_id, right_id, stop_line_id (null when none);
+//   left_id, right_id, stop_line_id (null when none), partial (true on the road a drive ended on,
+//   mapped as far as driven), partial_station_m and road_length_m (where along the atomic road its
+//   lanes stop, and the road's length; null unless partial), confidence (the lane's, 0..1,
+//   core/mapping/lane_confidence.h; null when the map has none);
 // - per lanelet with >= 2 centre points, a LineString: feature="centre_line", lanelet, kind,
-//   road_id, index_from_left, turn;
+//   road_id, index_from_left, turn, partial, partial_station_m, road_length_m, confidence;
 // - per line string, a LineString (a Point when it has one point): feature="boundary", id,
 //   type ("dashed", "solid", "solid_solid", "curbstone", "virtual", "stop_line");
 // - per regulatory element whose stop line exists, a MultiLineString (the stop line; a traffic

@@ -6,7 +6,8 @@
 //
 // Conventions (see also writeLanelet2/readLanelet2 below):
 // - lanemap's own metadata (a lanelet's kind, road_id, from/to node, intersection id, lane index,
-//   stop line) and the mm-precise ENU coordinates of the nodes are not in the OSM file but in a
+//   stop line, "partial": {station_m, road_length_m} on a road mapped as far as a drive went,
+//   "confidence" of the lane) and the mm-precise ENU coordinates of the nodes are not in the OSM file but in a
 //   sidecar beside it: MAP.osm -> MAP.lanemap.json (lanelet2SidecarPath), keyed by lanelet id and
 //   bound to the OSM file by the FNV-1a hash of its bytes. readLanelet2 uses it transparently;
 //   a copy of the OSM file under another name in the same folder finds its sidecar by the hash.
@@ -47,6 +48,7 @@
 
 #include "core/geo/local_frame.h"
 #include "core/io/atomic_file.h"
+#include "core/io/lanelet2_orientation.h"
 #include "core/map/lane_map.h"
 
 #include <cstdint>
@@ -126,22 +128,6 @@ std::string autowareProjectorInfo(const map::LaneMap& map);
 // with turn_direction_tags and stop_line_road_markings set.
 void writeAutowareMapFolder(const map::LaneMap& map, const std::string& dir,
                             const Lanelet2WriteOptions& options = {});
-
-// How Lanelet2's loader would read a lanelet: it aligns the two bounds as stored with
-// lanelet2::geometry::align (the left bound is turned unless the middle point of the right bound
-// lies on its right, then the right bound unless the middle point of the left lies on its left),
-// and the lanelet's direction is theirs. A message when the aligned bounds run against each other
-// or against the lanelet's centre line (its driving direction); empty when Lanelet2 reads it as
-// meant. Long U-shaped lanelets and sharp connections between overlapping lane ends can fail.
-std::string orientationProblem(const map::Lanelet& lanelet, const map::LineString& left,
-                               const map::LineString& right);
-// orientationProblem for every lanelet of the map. Empty when the map is consistent.
-std::vector<std::string> orientationProblems(const map::LaneMap& map);
-
-// The lanelet's outline for drawing and export: left bound forwards, then the right bound
-// backwards (the right bound turned first if it runs against the left one, so an inconsistently
-// oriented lanelet still gives a simple polygon). Not closed. Empty when a bound is missing.
-std::vector<Eigen::Vector3d> laneletOutline(const map::LaneMap& map, const map::Lanelet& lanelet);
 
 struct Lanelet2ReadOptions {
   std::vector<std::string> subtypes;  // lanelet subtypes to keep ("road", ...); empty = all

@@ -31,6 +31,14 @@ struct LineString {
   std::vector<Eigen::Vector3d> points;  // ENU metres
 };
 
+// A road the drive ended on, mapped as far as it was driven (issue 14): where its lanes stop, as
+// the station (arc length, m) along the atomic road's polyline the car reached, and the road's
+// length there. lanemap's metadata: in the Lanelet2 sidecar and the GeoJSON properties, not tags.
+struct PartialRoad {
+  double station_m = 0.0;
+  double road_length_m = 0.0;
+};
+
 struct Lanelet {
   int64_t id = 0;
   LaneletKind kind = LaneletKind::kRoad;
@@ -49,6 +57,10 @@ struct Lanelet {
   int64_t intersection_id = -1;         // OSM node id of the intersection (intersection lanelets)
   int index_from_left = -1;             // 0 = left-most lane of its road direction
   std::optional<int64_t> stop_line_id;  // LineString at the lanelet's end, if any
+  std::optional<PartialRoad> partial;   // a road lanelet of a road mapped only as far as driven
+  // How sure the mapper is of this lane, 0..1 (core/mapping/lane_confidence.h); none in maps that
+  // do not say (truth, foreign maps). lanemap's metadata: the sidecar and GeoJSON.
+  std::optional<double> confidence;
 };
 
 // A traffic rule at a stop line (Lanelet2 regulatory elements; see core/io/lanelet2.h for how each is

@@ -15,7 +15,7 @@
 #include "core/sim/world_builder.h"
 
 #include "core/intersections/curve.h"
-#include "core/io/lanelet2.h"
+#include "core/io/lanelet2_orientation.h"
 #include "core/map/simplify.h"
 #include "core/sim/world_geometry.h"
 #include "core/sim/world_scene.h"

@@ -5,7 +5,11 @@
 // checkpointed every checkpoint.period_s to <store>/bev/open/ (core/bev/bev_store.h); a builder
 // that starts and finds checkpoints carries those roads on (STATUS roads_recovered,
 // frames_recovered, and recovered_gap_ms: the time between the checkpoint's newest frame and the
-// first frame after the restart, what the crash cost). A thin wrapper over core/bev/bev_builder.h; the mesh
+// first frame after the restart, what the crash cost). End of the drive (the process stops: the log
+// player ended, or a shutdown): the road being driven never closed, so it is stored partial
+// (bev_store.h storePartialRoad: bev/partial/road_<id>.bev, with the station the last pose reached)
+// and announced on BEV_ROAD with that path; its checkpoint is removed (a crash, SIGKILL, skips this
+// and leaves the checkpoint for the next start). STATUS roads_partial. A thin wrapper over core/bev/bev_builder.h; the mesh
 // of each LIDAR sweep is built in core's worker thread so LCM handling never waits for it, a frame
 // projection runs inline (tools/bench/bev_bench.cc: ~10-20 ms). Counters in STATUS.
 //
@@ -27,6 +31,7 @@
 #include "core/camera/camera_model.h"
 #include "core/config/vehicle_config.h"
 #include "core/io/store_lock.h"
+#include "core/mapping/partial_road.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
 #include "lanemap/bev_preview_t.hpp"
@@ -107,16 +112,20 @@ class BevBuilderApp {
     lcm.subscribe(channels::kRoadEvent, &BevBuilderApp::onRoadEvent, this)->setQueueCapacity(q_event);
   }
 
-  // After spin(): roads that were closing are handed over too.
+  // After spin(): roads that were closing are handed over too, and the road being driven is
+  // stored partial.
   void finish() {
     builder_.finish();
     writeClosed();
+    writePartial();
     updateCounters();
   }
 
  private:
   void onPose(const lcm::ReceiveBuffer*, const std::string&, const pose_t* m) {
-    builder_.addPose(toTimedPose(toEnuPose(*m, skeleton_->frame())));
+    const EnuPose p = toEnuPose(*m, skeleton_->frame());
+    if (p.position.allFinite()) last_position_ = p.position.head<2>();
+    builder_.addPose(toTimedPose(p));
     afterMessage();
   }
 
@@ -273,6 +282,32 @@ class BevBuilderApp {
     }
   }
 
+  // The open road at the end of the drive, driven as far as the last pose.
+  void writePartial() {
+    std::optional<bev::RoadBev> open;
+    builder_.withOpenRoad([&](const bev::RoadBev& road) {
+      if (road.grid.frames() > 0) open = road;  // a copy
+    });
+    if (!open || !last_position_) return;
+    const auto* road = skeleton_->road(open->road_id);
+    if (!road) return;
+    try {
+      const lanes::ExplorerOptions frame;  // the station in the explorer's frame of the road (its defaults)
+      const auto stored = bev::storePartialRoad(store_, *open, mapping::roadStation(*road, *last_position_, frame),
+                                                mapping::roadFrameLength(*road, frame));
+      open->closed_utime = last_projected_utime_;
+      publish(*open, stored);
+      bev::removeCheckpoint(store_, open->road_id);
+      checkpointed_.erase(open->road_id);
+      process_.counters().add(stored.partial ? "roads_partial" : "roads_written");
+      std::cerr << "bev_builder: road " << open->road_id << (stored.partial ? " stored partial, to " : " (complete already) driven to ")
+                << static_cast<int>(stored.station_m) << " m of " << static_cast<int>(stored.road_length_m) << " m\n";
+    } catch (const std::exception& e) {
+      std::cerr << "bev_builder: partial road " << open->road_id << ": " << e.what() << "\n";
+      process_.counters().add("roads_write_failed");
+    }
+  }
+
   void publish(const bev::RoadBev& road, const bev::StoredRoad& stored) {
     bev_road_t msg;
     msg.utime = road.closed_utime;
@@ -341,6 +376,7 @@ class BevBuilderApp {
   int64_t last_projected_utime_ = 0;
   int64_t last_label_seq_ = -1, labels_received_ = 0;
   int64_t recovered_frame_utime_ = 0;     // newest frame of the recovered checkpoints, until a frame comes
+  std::optional<Eigen::Vector2d> last_position_;  // the newest pose (ENU), where a partial road stops
 };
 
 }  // namespace lanemap::bev_builder_app

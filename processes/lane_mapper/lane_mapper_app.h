@@ -5,6 +5,12 @@
 // a restart loses no finished road, and maps the roads whose BEV grid is newer than their lanes
 // (announced while it was down: STATUS roads_caught_up).
 //
+// A partial road (the road a drive ended on; BEV_ROAD's path is its bev/partial/ grid, whose JSON
+// says how far it was driven: bev_store.h partialRoad) is explored as far as it was driven and its
+// lanelets are tagged partial (core/mapping/partial_road.h; STATUS roads_partial); one driven too
+// little to map is counted (partial_roads_too_short). A later BEV_ROAD of the road's own grid (a
+// drive closed it, its partial evidence merged in) maps it again, complete.
+//
 // STATUS latency (per road): from the BEV_ROAD message's receive time (lcm::ReceiveBuffer::recv_utime)
 // to its LANE_MAP published: the wait behind other roads, loading the grid, lane exploration and
 // rewriting lane_map.osm. map_road_ms_max: exploring one road and writing its files, the worst road.
@@ -20,7 +26,9 @@
 #include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
 #include "core/lanes/stop_lines.h"
+#include "core/mapping/lane_confidence.h"
 #include "core/mapping/map_assembler.h"
+#include "core/mapping/partial_road.h"
 #include "core/skeleton/skeleton.h"
 #include "lanemap/bev_road_t.hpp"
 #include "lanemap/lane_map_t.hpp"
@@ -37,6 +45,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -106,12 +115,33 @@ class LaneMapperApp {
   void mapRoad(const bev_road_t& job) {
     const skeleton::AtomicRoad* road = sk_->road(job.road_id);
     if (!road) throw std::runtime_error("unknown road id " + std::to_string(job.road_id));
+    std::optional<bev::PartialRoadInfo> partial;
+    if (fs::path(job.path) == fs::path(bev::partialGridPath(store_, job.road_id))) {
+      partial = bev::partialRoad(store_, job.road_id);
+      if (!partial) return;  // completed since (its own BEV_ROAD follows) or its station unknown
+    }
     const bev::BevGrid grid = bev::BevGrid::load(job.path);
     const auto t0 = std::chrono::steady_clock::now();
-    const lanes::ExplorationResult res = lanes::exploreRoad(grid, lanes::RoadGeometry::fromSkeleton(*road), options_);
+    lanes::RoadGeometry geometry = lanes::RoadGeometry::fromSkeleton(*road);
+    if (partial) {
+      try {
+        geometry = mapping::drivenStretch(*road, partial->station_m, options_);
+      } catch (const lanes::LanesError& e) {
+        process_.counters().add("partial_roads_too_short");
+        std::cerr << "lane_mapper: " << e.what() << "\n";
+        return;
+      }
+    }
+    const lanes::ExplorationResult res = lanes::exploreRoad(grid, geometry, options_);
     const auto& o = sk_->frame().origin();
     map::LaneMap m = lanes::toLaneMap(res, o.lat, o.lon, o.alt);
-    lanes::addStopLines(grid, m);  // stop lines the BEV saw at the lanes' ends
+    mapping::setConfidence(m, res, mapping::laneConfidences(grid, res, options_));  // per lane, 0..1
+    if (partial) {
+      mapping::markPartial(m, map::PartialRoad{partial->station_m, partial->road_length_m});  // no stop line where the car stopped
+      process_.counters().add("roads_partial");
+    } else {
+      lanes::addStopLines(grid, m);  // stop lines the BEV saw at the lanes' ends
+    }
     int64_t next_id = 1;
     for (const auto& l : m.lines) next_id = std::max(next_id, l.id + 1);
     for (const auto& l : m.lanelets) next_id = std::max(next_id, l.id + 1);
@@ -178,6 +208,19 @@ class LaneMapperApp {
       jobs_.push_back(job);
       process_.counters().add("roads_caught_up");
       std::cerr << "lane_mapper: road " << id << " has a BEV grid but no lanes newer than it: mapping it now\n";
+    }
+    for (const auto& [id, p] : bev::partialRoads(store_)) {  // roads a drive ended on
+      const std::string lanes = roadFile(id);
+      if (fs::exists(bev::roadGridPath(store_, id), ec)) continue;  // complete (the loop above)
+      if (fs::exists(lanes, ec) && fs::last_write_time(lanes, ec) >= fs::last_write_time(p.path, ec)) continue;
+      Job job;
+      job.road.road_id = id;
+      job.road.path = p.path;
+      job.road.utime = nowUtime();
+      job.recv_utime = nowUtime();
+      jobs_.push_back(job);
+      process_.counters().add("roads_caught_up");
+      std::cerr << "lane_mapper: partial road " << id << " has no lanes newer than its BEV grid: mapping it now\n";
     }
   }
 

@@ -4,6 +4,7 @@
 // <store>/bev/road_<id>.bev, loadable, with the extent and frame count the message gives, and its
 // drivable cells on the simulator's true lanes. STATUS counts the frames.
 #include "core/bev/bev_grid.h"
+#include "core/bev/bev_store.h"
 #include "core/osm/osm_data.h"
 #include "core/sim/world_builder.h"
 #include "core/skeleton/skeleton.h"
@@ -58,12 +59,14 @@ TEST(BevBuilderProcess, WritesAndAnnouncesTheRoadsTheCarDroveToTheirEnd) {
     return;
   }
   std::set<int64_t> expected;
+  int64_t ended_on = -1;  // the road the drive ended on (not left)
   {
     std::ifstream f(dir + "/scenario.json");
     const auto scenario = nlohmann::json::parse(f);
     for (const auto& r : scenario["route"]) {
       if (!r["left_utime"].is_null()) expected.insert(r["road_id"].get<int64_t>());
     }
+    if (scenario["route"].back()["left_utime"].is_null()) ended_on = scenario["route"].back()["road_id"].get<int64_t>();
   }
   ASSERT_FALSE(expected.empty());
   lt::TempDir store("bev-process");
@@ -116,6 +119,15 @@ TEST(BevBuilderProcess, WritesAndAnnouncesTheRoadsTheCarDroveToTheirEnd) {
   std::set<int64_t> announced;
   for (const auto& m : c.roads) announced.insert(m.road_id);
   EXPECT_EQ(announced, expected);
+  // Stopped mid-road: the road being driven is stored partial, as far as the last pose, and its
+  // checkpoint removed (issue 14).
+  ASSERT_GE(ended_on, 0) << "the drive ends on a road";
+  const auto partial = bev::partialRoad(store.str(), ended_on);
+  ASSERT_TRUE(partial.has_value()) << "road " << ended_on << " not stored partial";
+  EXPECT_GT(partial->station_m, 0.0);
+  EXPECT_LT(partial->station_m, partial->road_length_m);
+  EXPECT_GT(partial->frames, 0);
+  EXPECT_FALSE(std::filesystem::exists(bev::checkpointPath(store.str(), ended_on)));
 
   const auto sk = skeleton::Skeleton::build(osm::readOsm(osm));
   sim::WorldOptions wo = sim::WorldOptions::fromYamlFile(kSrc + "/config/sim_world.yaml");

@@ -5,7 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
 #include <fstream>
+#include <optional>
 #include <set>
 
 #include "tests/common/sim_drive.h"
@@ -95,6 +98,121 @@ TEST(DrivenArea, RouteFromScenarioSkipsTheRoadTheDriveEndedOn) {
     EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
   }
   EXPECT_THROW(lanemap::eval::drivenRoadsFromScenario(dir.str("missing.json")), std::runtime_error);
+}
+
+// The road a drive ended on (issue 14): the car drove road 1 (10->20) to its end and road 2
+// (20->30, east x 10..100) to x = 40. A mapper that maps road 2 as far as driven is scored on
+// that part; the old scoring dropped road 2's truth and counted its lanes against precision.
+LaneMap builtAsFarAsDriven(const LaneMap& truth, double x_end) {
+  lanemap::testing::MapBuilder b;
+  b.next = 1000;
+  for (const auto& l : truth.lanelets) {
+    if (l.kind != LaneletKind::kRoad || l.road_id == 3) continue;
+    lanemap::eval::Polyline c;
+    for (const auto& p : l.centre) {
+      if (l.road_id == 1 || p.x() <= x_end + 1e-9) c.push_back(p.head<2>());
+    }
+    const int64_t id = b.lane(c, l.road_id);
+    for (auto& ll : b.m.lanelets) {
+      if (ll.id == id) ll.partial = l.road_id == 2 ? std::optional<lanemap::map::PartialRoad>({x_end - 10, 90}) : std::nullopt;
+    }
+  }
+  return b.m;
+}
+
+TEST(DrivenArea, TheRoadTheDriveEndedOnIsScoredAsFarAsDriven) {
+  const LaneMap truth = network({});
+  lanemap::eval::DrivenArea area;
+  area.roads = {{10, 20}};
+  area.partial.push_back({{20, 30}, {40.0, -3.0}});
+  const LaneMap driven = lanemap::eval::restrictToDriven(truth, area);
+  EXPECT_EQ(roadsOf(driven), (std::set<std::pair<int64_t, int64_t>>{{10, 20}, {20, 30}}));
+  size_t road2 = 0, connectors = 0;
+  for (const auto& l : driven.lanelets) {
+    if (l.kind == LaneletKind::kIntersection) ++connectors;
+    if (l.road_id != 2) continue;
+    ++road2;
+    EXPECT_NEAR(l.centre.front().x(), 10.0, 1e-9);
+    EXPECT_NEAR(l.centre.back().x(), 40.0, 1e-6) << "cut across the road at the car's last position";
+    for (const int64_t b : {l.left_id, l.right_id}) {
+      const auto* line = driven.line(b);
+      ASSERT_NE(line, nullptr);
+      EXPECT_NEAR(line->points.back().x(), 40.0, 1e-6);
+      EXPECT_NEAR(line->points.front().x(), 10.0, 1e-6);
+    }
+  }
+  EXPECT_EQ(road2, 2u);
+  EXPECT_EQ(connectors, 2u) << "the junction into road 2 was driven";
+  // The original (uncut) bounds are still in the truth for anyone else: the cut ones are copies.
+  EXPECT_NEAR(truth.line(truth.lanelets[2].left_id)->points.back().x(), 100.0, 1e-9);
+
+  const LaneMap built = builtAsFarAsDriven(truth, 40.0);
+  const auto by_driven = lanemap::eval::evaluate(driven, built);
+  EXPECT_DOUBLE_EQ(by_driven.lane_precision.value(), 1.0);
+  EXPECT_DOUBLE_EQ(by_driven.lane_recall.value(), 1.0);
+  EXPECT_LT(by_driven.lane_rms_m, 0.01);
+  EXPECT_GT(by_driven.lane_miou, 0.95);
+  // The old scoring: road 2 dropped from the truth, its two lanes false positives.
+  const auto old = lanemap::eval::evaluate(lanemap::eval::restrictToRoads(truth, area.roads), built);
+  EXPECT_DOUBLE_EQ(old.lane_precision.value(), 2.0 / 4.0);
+  // Scoring road 2 whole would miss its lanes past x = 40 (IoU 0.33).
+  const auto whole = lanemap::eval::evaluate(lanemap::eval::restrictToRoads(truth, {{10, 20}, {20, 30}}), built);
+  EXPECT_LT(whole.lane_recall.value(), 1.0);
+  // A map without the partial road misses its two lanes.
+  LaneMap without = built;
+  without.lanelets.erase(std::remove_if(without.lanelets.begin(), without.lanelets.end(),
+                                        [](const auto& l) { return l.road_id == 2; }),
+                         without.lanelets.end());
+  EXPECT_DOUBLE_EQ(lanemap::eval::evaluate(driven, without).lane_recall.value(), 2.0 / 4.0);
+}
+
+TEST(DrivenArea, ACutKeepsWholePiecesBeforeItAndDropsThoseAfter) {
+  const LaneMap truth = network(lanemap::testing::with([](lanemap::testing::Net& n) { n.split_b0 = true; }));
+  // B0 in pieces 10..40, 40..70, 70..100; B1 whole 10..100. Cut at x = 55.
+  const LaneMap cut = lanemap::eval::cutRoadAt(truth, {20, 30}, {55.0, -2.0});
+  size_t pieces = 0;
+  for (const auto& l : cut.lanelets) {
+    if (l.road_id != 2) continue;
+    ++pieces;
+    EXPECT_LE(l.centre.back().x(), 55.0 + 1e-6);
+    for (int64_t s : l.successors) EXPECT_NE(cut.lanelet(s), nullptr) << "dangling successor " << s;
+    if (l.centre.front().x() < 11 && l.centre.back().x() > 39 && l.centre.back().x() < 41) {
+      EXPECT_EQ(l.successors.size(), 1u) << "the whole piece before the cut keeps its successor";
+    }
+  }
+  EXPECT_EQ(pieces, 3u) << "B0's 10..40 and 40..55, B1's 10..55; B0's 70..100 is dropped";
+  // A cut on a road the truth has no lanes on changes nothing.
+  EXPECT_EQ(lanemap::eval::cutRoadAt(truth, {70, 80}, {0, 0}).lanelets.size(), truth.lanelets.size());
+}
+
+TEST(DrivenArea, TheRoadTheDriveEndedOnComesFromScenarioAndTrajectory) {
+  lanemap::testing::TempDir dir("driven-partial");
+  {
+    std::ofstream f(dir.str("scenario.json"));
+    f << R"({"origin": {"lat": 37.8, "lon": -122.3, "alt": 5.0},
+             "route": [{"road_id": 4, "from": 10, "to": 20, "left_utime": 100},
+                       {"road_id": 9, "from": 20, "to": 30, "left_utime": null}]})";
+    std::ofstream t(dir.str("trajectory.csv"));
+    t << "t_s,utime,east_m,north_m,up_m,yaw_rad,speed_mps,lanelet,road_id\n"
+         "0.000,0,0.0,0.0,0.0,0.0,5.0,1,4\n"
+         "0.100,100000,40.0,-3.0,0.0,0.0,5.0,2,9\n";
+  }
+  const lanemap::geo::LocalFrame same({37.8, -122.3, 5.0});
+  auto area = lanemap::eval::drivenAreaFromScenario(dir.str("scenario.json"), same);
+  EXPECT_EQ(area.roads, (std::set<lanemap::eval::RoadKey>{{10, 20}}));
+  ASSERT_EQ(area.partial.size(), 1u);
+  EXPECT_EQ(area.partial[0].road, (lanemap::eval::RoadKey{20, 30}));
+  EXPECT_NEAR(area.partial[0].end.x(), 40.0, 1e-6);
+  EXPECT_NEAR(area.partial[0].end.y(), -3.0, 1e-6);
+  // In another frame (the truth's origin 100 m east of the scenario's), the same point.
+  const lanemap::geo::LocalFrame other(same.toWgs84({100.0, 0.0, 0.0}));
+  area = lanemap::eval::drivenAreaFromScenario(dir.str("scenario.json"), other);
+  ASSERT_EQ(area.partial.size(), 1u);
+  EXPECT_NEAR(area.partial[0].end.x(), -60.0, 0.01);
+  EXPECT_NEAR(area.partial[0].end.y(), -3.0, 0.01);
+  // Without trajectory.csv: the closed roads only.
+  std::filesystem::remove(dir.str("trajectory.csv"));
+  EXPECT_TRUE(lanemap::eval::drivenAreaFromScenario(dir.str("scenario.json"), same).partial.empty());
 }
 
 }  // namespace

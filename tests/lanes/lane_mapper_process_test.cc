@@ -3,7 +3,9 @@
 // LANE_MAP must carry our direction's two lanes at the painted centre lines, the store must hold
 // the road's Lanelet2 file and the whole map; a bad grid is counted and the process goes on; a
 // restarted process republishes the stored road without any input.
+#include "core/bev/bev_store.h"
 #include "core/io/lanelet2.h"
+#include "core/lanes/frenet.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
 #include "lanemap/bev_road_t.hpp"
@@ -175,6 +177,79 @@ TEST(LaneMapperProcess, MapsARoadStoresItAndReloadsAfterRestart) {
     }
     EXPECT_EQ(again.lanes[k].left_boundary.type, first.lanes[k].left_boundary.type);
   }
+}
+
+// A partial road (issue 14: the BEV builder stored the road a drive ended on, driven to a station)
+// is mapped as far as driven, its lanelets tagged partial in the store; once a drive closes the
+// road (storeRoad merges the partial evidence) its BEV_ROAD maps it complete.
+TEST(LaneMapperProcess, MapsAPartialRoadAsFarAsDrivenThenComplete) {
+  if (!lanemap::testing::inPrivateNetns()) {
+    ASSERT_EQ(lanemap::testing::rerunInPrivateNetns(), 0);
+    return;
+  }
+  const skeleton::Skeleton sk = skeleton::Skeleton::build(osm::readOsm(kOsm));
+  const skeleton::AtomicRoad* road = straightRoad(sk);
+  ASSERT_NE(road, nullptr);
+  lanemap::testing::TempDir tmp("lane-mapper-partial");
+  const std::string store = tmp.str("store");
+  bev::RoadBev pass;
+  pass.road_id = road->id;
+  pass.grid = lanes::testing::paint(twoByTwo(*road));
+  const double station = road->s_begin + 40.0;
+  const auto stored = bev::storePartialRoad(store, pass, station, road->length);
+  ASSERT_TRUE(stored.partial);
+  const std::string url = lanemap::testing::testUdpmUrl(7684);
+  lcm::LCM lcm(url);
+  ASSERT_TRUE(lcm.good());
+  Collector c;
+  lcm.subscribe("LANE_MAP", &Collector::onMap, &c)->setQueueCapacity(100);
+  lcm.subscribe("STATUS", &Collector::onStatus, &c)->setQueueCapacity(100);
+  const std::string road_file = store + "/lanes/road_" + std::to_string(road->id) + ".osm";
+  const auto& o = sk.frame().origin();
+  const lanes::FrenetFrame frame(road->polyline);
+  auto furthest = [&](const map::LaneMap& m) {
+    double s_max = 0;
+    for (const auto& l : m.lanelets) {
+      for (const auto& p : l.centre) s_max = std::max(s_max, frame.toFrenet(p.head<2>()).x());
+    }
+    return s_max;
+  };
+  lanemap::testing::ChildProcess proc({kBinary, "--config", kConfig, "--osm", kOsm, "--store", store, "--lcm-url", url});
+  ASSERT_TRUE(proc.started());
+  // On start it finds the partial road without lanes and maps it (catch-up); a BEV_ROAD as the
+  // BEV builder sends it maps it again.
+  ASSERT_TRUE(waitFor(lcm, [&] { return !c.status.empty() && counter(c.status.back(), "roads_partial") >= 1; }, 30))
+      << "the partial road was not mapped";
+  bev_road_t msg{};
+  msg.road_id = road->id;
+  msg.path = stored.path;
+  lcm.publish("BEV_ROAD", &msg);
+  ASSERT_TRUE(waitFor(lcm, [&] { return counter(c.status.back(), "roads_partial") >= 2; }, 30));
+  {
+    const auto m = io::readLanelet2(road_file, o.lat, o.lon);
+    ASSERT_EQ(m.lanelets.size(), 2u);
+    for (const auto& l : m.lanelets) {
+      ASSERT_TRUE(l.partial.has_value()) << l.id;
+      EXPECT_DOUBLE_EQ(l.partial->station_m, station);
+      EXPECT_DOUBLE_EQ(l.partial->road_length_m, road->length);
+      ASSERT_TRUE(l.confidence.has_value());
+      EXPECT_GT(*l.confidence, 0.8) << "painted lanes, seen all along";
+    }
+    EXPECT_LT(furthest(m), station + 1.0) << "no lane past where the car stopped";
+    EXPECT_GT(furthest(m), station - 3.0);
+  }
+  // A later drive closes the road: complete now.
+  const auto complete = bev::storeRoad(store, pass);
+  ASSERT_TRUE(complete.completed_partial);
+  msg.path = complete.path;
+  const int64_t mapped_before = counter(c.status.back(), "roads_mapped");
+  lcm.publish("BEV_ROAD", &msg);
+  ASSERT_TRUE(waitFor(lcm, [&] { return counter(c.status.back(), "roads_mapped") > mapped_before; }, 30));
+  EXPECT_GE(proc.stop(), 0);
+  const auto m = io::readLanelet2(road_file, o.lat, o.lon);
+  ASSERT_EQ(m.lanelets.size(), 2u);
+  for (const auto& l : m.lanelets) EXPECT_FALSE(l.partial.has_value()) << l.id;
+  EXPECT_GT(furthest(m), road->s_end - 5.0) << "complete: the lanes reach the end intersection";
 }
 
 TEST(LaneMapperProcess, FailsClearlyWithoutAnOsmFile) {

@@ -1,6 +1,8 @@
 // lanemap-offline end to end on a simulated drive (camera labels from the simulator's truth, LIDAR
-// mesh): the map it writes loads, covers the roads the car drove to their end, and lanemap-eval
-// scores it against groundtruth.osm on those roads. The drive is the BEV tests' (tests/bev).
+// mesh): the map it writes loads, covers the roads the car drove to their end and, as far as it
+// was driven, the road the drive ended on (tests/mapping/partial_offline_test.cc has the details),
+// and lanemap-eval scores it against groundtruth.osm on what was driven. The drive is the BEV
+// tests' (tests/bev).
 #include "core/eval/area.h"
 #include "core/eval/evaluate.h"
 #include "core/io/lanelet2.h"
@@ -33,16 +35,41 @@ TEST(Offline, MapsTheDrivenRoadsAndScoresAgainstTheTruth) {
   }
   ASSERT_FALSE(closed.empty());
 
+  // summary.json: every road explored, with its lanes, none failed; the labels it mapped on. The
+  // road the drive ended on (route's last entry, not left) is mapped partial when enough of it
+  // was driven.
+  std::ifstream sj(out.str("map/summary.json"));
+  const auto summary = nlohmann::json::parse(sj);
+  std::set<int64_t> partial;
+  for (const auto& r : summary["roads"]) {
+    if (r.contains("partial")) partial.insert(r["road_id"].get<int64_t>());
+  }
+  ASSERT_LE(partial.size(), 1u);
+  if (!partial.empty()) {
+    EXPECT_TRUE(scenario["route"].back()["left_utime"].is_null());
+    EXPECT_EQ(*partial.begin(), scenario["route"].back()["road_id"].get<int64_t>());
+  }
+  std::set<int64_t> driven = closed;
+  driven.insert(partial.begin(), partial.end());
+
   const auto origin = lanemap::eval::lanelet2Origin(drive + "/groundtruth.osm");
   const auto truth = lanemap::io::readLanelet2(drive + "/groundtruth.osm", origin.lat, origin.lon);
   const auto built = lanemap::io::readLanelet2(out.str("map/map.osm"), origin.lat, origin.lon);
   std::set<int64_t> mapped;
   for (const auto& l : built.lanelets) {
-    if (l.kind == lanemap::map::LaneletKind::kRoad) mapped.insert(l.road_id);
+    if (l.kind == lanemap::map::LaneletKind::kRoad) {
+      mapped.insert(l.road_id);
+      EXPECT_EQ(l.partial.has_value(), partial.count(l.road_id) > 0) << l.id;
+      ASSERT_TRUE(l.confidence.has_value()) << l.id;
+      EXPECT_GE(*l.confidence, 0.0);
+      EXPECT_LE(*l.confidence, 1.0);
+    }
   }
-  EXPECT_EQ(mapped, closed);
+  EXPECT_EQ(mapped, driven);
 
-  const auto report = lanemap::eval::evaluate(lanemap::eval::restrictToMappedRoads(truth, built), built);
+  // Scored on what was driven: the closed roads and the partial one as far as the car went.
+  const auto area = lanemap::eval::drivenAreaFromScenario(drive + "/scenario.json", lanemap::geo::LocalFrame(origin));
+  const auto report = lanemap::eval::evaluate(lanemap::eval::restrictToDriven(truth, area), built);
   std::printf("offline on oracle labels: lanes P %.3f R %.3f RMS %.3f m mIoU %.3f\n", report.lane_precision.value(),
               report.lane_recall.value(), report.lane_rms_m, report.lane_miou);
   // The paper's best (Berkeley, LIDAR + camera): P 0.84, R 0.73, RMS 0.24 m, mIoU 0.79. On this
@@ -54,9 +81,6 @@ TEST(Offline, MapsTheDrivenRoadsAndScoresAgainstTheTruth) {
   EXPECT_GE(report.lane_precision.value(), 0.6);
   EXPECT_GE(report.lane_miou, 0.6);
 
-  // summary.json: every road explored, with its lanes, none failed; the labels it mapped on.
-  std::ifstream sj(out.str("map/summary.json"));
-  const auto summary = nlohmann::json::parse(sj);
   EXPECT_EQ(summary["labels"], "SEMANTIC_FRONT_TRUTH");
   EXPECT_EQ(summary["roads_failed"], 0);
   EXPECT_EQ(summary["roads_mapped"].get<size_t>(), summary["roads"].size());
@@ -65,7 +89,7 @@ TEST(Offline, MapsTheDrivenRoadsAndScoresAgainstTheTruth) {
     explored.insert(r["road_id"].get<int64_t>());
     EXPECT_GE(r["lanes"].get<int>(), 1) << r.dump();
   }
-  EXPECT_EQ(explored, closed);
+  EXPECT_EQ(explored, driven);
 
   // lanemap-eval --driven: the route from scenario.json and the route map-matched from the log's
   // POSE by the road tracker are the same roads, so the same truth is scored.
@@ -81,7 +105,8 @@ TEST(Offline, MapsTheDrivenRoadsAndScoresAgainstTheTruth) {
   EXPECT_EQ(rb["driven_roads"], ra["driven_roads"]);
   EXPECT_EQ(rb["lanes"]["truth"], ra["lanes"]["truth"]);
   EXPECT_EQ(rb["intersections"]["truth_pairs"], ra["intersections"]["truth_pairs"]);
-  // Every driven road was mapped here, so --driven scores the same truth lanes as the mapped roads.
+  EXPECT_EQ(ra["partial_roads"], rb["partial_roads"]);
+  // Every driven road was mapped here, so --driven scores the truth lanes scored above.
   EXPECT_EQ(ra["lanes"]["truth"].get<size_t>(), report.truth_lanes.size());
   const auto bad = lt::runCommand(eval + " --driven " + drive + "/drive.lcmlog");
   EXPECT_NE(bad.exit_code, 0);

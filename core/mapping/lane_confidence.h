@@ -1,0 +1,33 @@
+// Per-lane confidence (issue 14): a number in [0, 1] from the evidence behind an explored lane, so
+// a map user can tell the lanes to trust from those to check. The mean of three shares:
+// - observed: the share of the lane's way-points whose BEV cell was seen drivable;
+// - bounds: the share of its boundary points that the probe found (a marking, curb or the end of
+//   the drivable area) rather than put at default_half_width_m from the centre;
+// - support: the lane's particle density (particle positions behind its regression per metre)
+//   relative to the best-supported lane of its road (a spurious lane beside a real one is
+//   carried by few particles).
+// Not in it (yet): the number of traversals and their agreement after alignment.
+#pragma once
+
+#include "core/bev/bev_grid.h"
+#include "core/lanes/explorer.h"
+#include "core/map/lane_map.h"
+
+#include <vector>
+
+namespace lanemap::mapping {
+
+struct LaneConfidence {
+  double observed = 0.0, bounds = 0.0, support = 0.0;
+  double value() const { return (observed + bounds + support) / 3.0; }
+};
+
+// One per lane of `result` (same order).
+std::vector<LaneConfidence> laneConfidences(const bev::BevGrid& grid, const lanes::ExplorationResult& result,
+                                            const lanes::ExplorerOptions& options);
+
+// Sets every road lanelet's confidence in `lanes` (toLaneMap(result)) to its lane's: the lane
+// whose centre is nearest the lanelet's middle point.
+void setConfidence(map::LaneMap& lanes, const lanes::ExplorationResult& result, const std::vector<LaneConfidence>& confidence);
+
+}  // namespace lanemap::mapping

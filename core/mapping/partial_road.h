@@ -1,0 +1,40 @@
+// The road the car is on when a drive ends (issue 14): it never reached its end intersection, so it
+// never closed; its evidence is explored on what was driven, and its lanes are written tagged
+// partial with where they stop (map::PartialRoad). One place for lanemap-offline and the lane
+// mapper, so both cut a partial road the same way.
+// - The station: the car's last position projected on the road in the explorer's Frenet frame
+//   (the road polyline, frame_spacing_m / frame_smoothing_m as exploreRoad builds it), so a station
+//   and the explored lanes' s agree.
+// - The driven stretch: the road's own [s_begin, s_end] (explorer.h explorationStretch) ending at
+//   the station: the particles stop there, so no lane goes past where the car was (nothing is
+//   extrapolated). Under min_lane_length_m driven past s_begin there is nothing to map.
+#pragma once
+
+#include "core/lanes/explorer.h"
+#include "core/map/lane_map.h"
+#include "core/skeleton/skeleton.h"
+
+#include <Eigen/Core>
+
+namespace lanemap::mapping {
+
+// Arc length along the road (the explorer's frame of it) of the point nearest to `p`, clamped to
+// [0, length].
+double roadStation(const skeleton::AtomicRoad& road, const Eigen::Vector2d& p, const lanes::ExplorerOptions& options);
+
+// The explorer's frame length of the road (what road_length_m of a partial road is).
+double roadFrameLength(const skeleton::AtomicRoad& road, const lanes::ExplorerOptions& options);
+
+// The road's geometry for exploring it as far as `station_m`: s_end = min(s_end, station_m).
+// Throws lanes::LanesError (naming the road and the metres driven) when under
+// options.min_lane_length_m of the road past s_begin was driven.
+lanes::RoadGeometry drivenStretch(const skeleton::AtomicRoad& road, double station_m, const lanes::ExplorerOptions& options);
+
+// Tags every road lanelet of `lanes` partial (station, road length); the explored lanes stop at
+// station_m.
+void markPartial(map::LaneMap& lanes, const map::PartialRoad& partial);
+
+// Whether any road lanelet of the map is partial.
+bool isPartial(const map::LaneMap& lanes);
+
+}  // namespace lanemap::mapping

@@ -1,0 +1,87 @@
+// Per-lane confidence (core/mapping/lane_confidence.h) from hand-made evidence: a lane seen drivable
+// all along, with both bounds found and the most particles, is 1.0; one seen on half its length,
+// with half its bounds at the default width and a quarter of the particle density, is the mean of
+// those shares. setConfidence puts each lane's value on its lanelets.
+#include "core/mapping/lane_confidence.h"
+
+#include "core/lanes/frenet.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+
+namespace lanemap::mapping {
+namespace {
+
+lanes::Lane lane(int id, double d, int64_t samples) {
+  lanes::Lane l;
+  l.id = id;
+  l.s_begin = 0.0;
+  l.s_end = 60.0;
+  lanes::PiecewiseLinearFit fit;
+  fit.knots = {0.0, 60.0};
+  fit.values = {d, d};
+  l.centre = lanes::CentreLine(fit, 0.0, 60.0);
+  l.particle_samples = samples;
+  return l;
+}
+
+TEST(LaneConfidence, FromObservedShareBoundsAndParticleSupport) {
+  const lanes::ExplorerOptions o;
+  lanes::ExplorationResult r;
+  r.road_id = 4;
+  r.frame = std::make_shared<lanes::FrenetFrame>(std::vector<Eigen::Vector2d>{{0, 0}, {60, 0}}, o.frame_spacing_m, 0.0);
+  r.lanes = {lane(0, 1.75, 6000), lane(1, 5.25, 1500)};  // 100 and 25 particle samples per metre
+  r.lanes[0].index_from_left = 1;
+  r.lanes[1].index_from_left = 0;
+  int b_found = 0, b_probes = 0;
+  for (auto& l : r.lanes) {
+    for (int k = 0; k <= 30; ++k) {
+      const double s = 2.0 * k, d = l.centre.d(s);
+      l.waypoint_s.push_back(s);
+      l.waypoints.push_back(r.frame->toEnu(s, d));
+      const bool found = l.id == 0 || k % 2 == 0;  // lane 1: every other way-point at the default width
+      l.left.d.push_back(found ? d + 1.6 : d + o.default_half_width_m);
+      l.right.d.push_back(found ? d - 1.7 : d - o.default_half_width_m);
+      l.left.points.push_back(r.frame->toEnu(s, l.left.d.back()));
+      l.right.points.push_back(r.frame->toEnu(s, l.right.d.back()));
+      if (l.id == 1) {
+        b_probes += 2;
+        b_found += found ? 2 : 0;
+      }
+    }
+  }
+  // Drivable: lane 0 all along, lane 1 on x < 30 only.
+  bev::BevGrid grid;
+  for (double x = 0.05; x < 61; x += 0.1) {
+    for (double y = 0.05; y < 7.0; y += 0.1) {
+      if (y > 3.5 && x >= 29.95) continue;
+      grid.add(grid.cellOf({x, y}), bev::Layer::kObserved, 2);
+      grid.add(grid.cellOf({x, y}), bev::Layer::kDrivable, 2);
+    }
+  }
+  const auto c = laneConfidences(grid, r, o);
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_DOUBLE_EQ(c[0].observed, 1.0);
+  EXPECT_DOUBLE_EQ(c[0].bounds, 1.0);
+  EXPECT_DOUBLE_EQ(c[0].support, 1.0);
+  EXPECT_DOUBLE_EQ(c[0].value(), 1.0);
+  EXPECT_DOUBLE_EQ(c[1].observed, 15.0 / 31.0);  // way-points at x = 0, 2, ..., 28
+  EXPECT_DOUBLE_EQ(c[1].bounds, static_cast<double>(b_found) / b_probes);
+  EXPECT_DOUBLE_EQ(c[1].support, 0.25);
+  EXPECT_NEAR(c[1].value(), (15.0 / 31.0 + 16.0 / 31.0 + 0.25) / 3.0, 1e-12);
+
+  map::LaneMap m = lanes::toLaneMap(r);
+  setConfidence(m, r, c);
+  int rated = 0;
+  for (const auto& ll : m.lanelets) {
+    if (ll.kind != map::LaneletKind::kRoad) continue;
+    ASSERT_TRUE(ll.confidence.has_value()) << ll.id;
+    EXPECT_DOUBLE_EQ(*ll.confidence, ll.index_from_left == 1 ? c[0].value() : c[1].value()) << ll.id;
+    ++rated;
+  }
+  EXPECT_EQ(rated, 2);
+}
+
+}  // namespace
+}  // namespace lanemap::mapping

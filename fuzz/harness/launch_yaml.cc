@@ -1,13 +1,14 @@
-// The launch configuration (tools/launch.cc loadLaunch: YAML, vars, ${...} substitution, hosts,
-// restart policies). tools/launch.cc is compiled into this harness with its main renamed. Input: a
-// launch YAML file (seeds: config/launch/*.yaml). Property: a bad file is a std::exception with a
-// message (lanemap-launch prints it and exits 2), never a crash; a good one has processes that all
-// run on a declared host with a non-empty command.
-#include <algorithm>
-#define main lanemap_launch_main
-#include "tools/launch.cc"
-#undef main
+// The launch configuration (tools/launch/config.h loadLaunch, lanemap-launch's parser: YAML, vars,
+// ${...} substitution, hosts, restart policies). Input: a launch YAML file (seeds:
+// config/launch/*.yaml). Property: a bad file is a std::exception with a message (lanemap-launch
+// prints it and exits 2), never a crash; a good one has processes that all run on a declared host
+// with a non-empty command.
 #include "fuzz/fuzz_util.h"
+#include "tools/launch/config.h"
+
+#include <algorithm>
+
+using namespace lanemap::launch;
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = lanemap::fuzz::scratchFile(data, size, "launch", ".yaml");

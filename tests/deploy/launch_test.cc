@@ -1,4 +1,4 @@
-// lanemap-launch (tools/launch.cc): host selection, command resolution, restart policies with
+// lanemap-launch (tools/launch.cc, tools/launch/): host selection, command resolution, restart policies with
 // back-off and max_restarts, stopping everything on SIGTERM (SIGKILL for a process that ignores
 // it), and clear errors for bad launch files. Children are plain shell commands that leave traces
 // in files, so no network is involved.

@@ -20,12 +20,6 @@ using BPoint = bg::model::d2::point_xy<double>;
 using BPolygon = bg::model::polygon<BPoint>;  // clockwise, closed
 using BMulti = bg::model::multi_polygon<BPolygon>;
 
-double polylineLength(const Polyline& pts) {
-  double len = 0.0;
-  for (size_t i = 1; i < pts.size(); ++i) len += (pts[i] - pts[i - 1]).norm();
-  return len;
-}
-
 namespace {
 
 // Point at arc length s (clamped) of `pts`, walking from segment `*seg` with `*seg_start` the arc

@@ -3,6 +3,8 @@
 // polygon IoU (Boost.Geometry, kept out of this header).
 #pragma once
 
+#include "core/geo/polyline.h"
+
 #include <Eigen/Core>
 
 #include <cstddef>
@@ -12,7 +14,7 @@ namespace lanemap::eval {
 
 using Polyline = std::vector<Eigen::Vector2d>;
 
-double polylineLength(const Polyline& pts);
+using geo::polylineLength;  // core/geo/polyline.h
 // Points every `step` metres of arc length from the first point; the last point is always kept.
 Polyline resampleSpacing(const Polyline& pts, double step);
 // `n` points evenly spread by arc length from the first to the last point (n >= 2).

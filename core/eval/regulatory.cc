@@ -1,4 +1,5 @@
 #include "core/eval/regulatory.h"
+#include "core/geo/polyline.h"
 
 #include <algorithm>
 #include <cmath>
@@ -98,8 +99,7 @@ double distanceToPolyline(const std::vector<Eigen::Vector3d>& pl, const Eigen::V
 
 // The point halfway along a polyline.
 Eigen::Vector2d midpointOf(const std::vector<Eigen::Vector3d>& pl) {
-  double total = 0.0;
-  for (size_t i = 1; i < pl.size(); ++i) total += (pl[i] - pl[i - 1]).head<2>().norm();
+  const double total = geo::polylineLengthXy(pl);
   double s = 0.0;
   for (size_t i = 1; i < pl.size(); ++i) {
     const double seg = (pl[i] - pl[i - 1]).head<2>().norm();

@@ -1,5 +1,6 @@
 // Connection curves of intersection lanelets (see curve.h).
 #include "core/intersections/curve.h"
+#include "core/geo/polyline.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,12 +13,8 @@ using Eigen::Vector2d;
 
 constexpr double kPi = 3.14159265358979323846;
 
-double cross(const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
-
-Vector2d unit(const Vector2d& v, const Vector2d& fallback) {
-  const double n = v.norm();
-  return n > 1e-12 ? Vector2d(v / n) : fallback;
-}
+using geo::cross;  // core/geo/polyline.h
+using geo::unit;
 
 bool segmentsCross(const Vector2d& a, const Vector2d& b, const Vector2d& c, const Vector2d& d) {
   const double d1 = cross(b - a, c - a), d2 = cross(b - a, d - a);

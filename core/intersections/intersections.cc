@@ -2,6 +2,7 @@
 #include "core/intersections/intersections.h"
 
 #include "core/config/yaml_reader.h"
+#include "core/geo/polyline.h"
 #include "core/io/lanelet2_orientation.h"
 
 #include <algorithm>
@@ -18,12 +19,8 @@ using Eigen::Vector2d;
 using Eigen::Vector3d;
 using map::TurnDirection;
 
-double cross(const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
-
-Vector2d unit(const Vector2d& v, const Vector2d& fallback) {
-  const double n = v.norm();
-  return n > 1e-12 ? Vector2d(v / n) : fallback;
-}
+using geo::cross;  // core/geo/polyline.h
+using geo::unit;
 
 bool startsWith(const std::string& s, const std::string& prefix) { return s.rfind(prefix, 0) == 0; }
 

@@ -15,12 +15,6 @@ namespace lanemap::io {
 
 namespace lanelet2_internal {
 
-double polylineLength(const std::vector<Eigen::Vector3d>& pts) {
-  double len = 0.0;
-  for (size_t i = 1; i < pts.size(); ++i) len += (pts[i] - pts[i - 1]).norm();
-  return len;
-}
-
 uint64_t fnv1a64(std::string_view bytes) {
   uint64_t h = 0xcbf29ce484222325ull;
   for (unsigned char c : bytes) {

@@ -14,8 +14,6 @@ namespace lanemap::io::lanelet2_internal {
 
 constexpr int kSidecarVersion = 1;
 
-double polylineLength(const std::vector<Eigen::Vector3d>& pts);
-
 // Lanelet2's geometry::align(left, right), which its OSM loader applies to every lanelet's bounds
 // as they are stored: the left bound is inverted unless the middle point of the right bound lies
 // on its right, then the right bound unless the middle point of the (aligned) left lies on its

@@ -1,5 +1,6 @@
 // Lanelet2 OSM reader for map::LaneMap (see lanelet2.h for the conventions).
 
+#include "core/geo/polyline.h"
 #include "core/io/lanelet2.h"
 #include "core/io/lanelet2_internal.h"
 
@@ -33,7 +34,7 @@ using lanelet2_internal::fnv1a64;
 using lanelet2_internal::hex64;
 using lanelet2_internal::kSidecarVersion;
 using lanelet2_internal::lanelet2Alignment;
-using lanelet2_internal::polylineLength;
+using geo::polylineLength;
 using lanelet2_internal::readAll;
 using lanelet2_internal::sidecarHashOf;
 

@@ -1,5 +1,6 @@
 // Lanelet2 OSM writer for map::LaneMap (see lanelet2.h for the conventions).
 
+#include "core/geo/polyline.h"
 #include "core/io/lanelet2.h"
 #include "core/io/lanelet2_internal.h"
 #include "core/io/xml_escape.h"
@@ -25,7 +26,7 @@ using map::TurnDirection;
 using lanelet2_internal::fnv1a64;
 using lanelet2_internal::hex64;
 using lanelet2_internal::kSidecarVersion;
-using lanelet2_internal::polylineLength;
+using geo::polylineLength;
 using lanelet2_internal::readAll;
 using lanelet2_internal::sidecarHashOf;
 

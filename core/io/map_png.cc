@@ -1,6 +1,7 @@
 // PNG picture of a LaneMap (see map_png.h).
 #include "core/io/map_png.h"
 
+#include "core/geo/polyline.h"
 #include "core/io/lanelet2.h"
 #include "core/skeleton/skeleton.h"
 
@@ -37,12 +38,6 @@ Polyline toPolyline2d(const std::vector<Eigen::Vector3d>& pts) {
   out.reserve(pts.size());
   for (const auto& p : pts) out.push_back(p.head<2>());
   return out;
-}
-
-double length(const Polyline& pts) {
-  double len = 0.0;
-  for (size_t i = 1; i < pts.size(); ++i) len += (pts[i] - pts[i - 1]).norm();
-  return len;
 }
 
 // The piece of a polyline between arc lengths s0 and s1.
@@ -112,13 +107,13 @@ class Painter {
   }
 
   void dashed(const Polyline& pts, const cv::Scalar& colour, int thickness, double dash_m, double gap_m) {
-    const double total = length(pts);
+    const double total = geo::polylineLength(pts);
     for (double s = 0.0; s < total; s += dash_m + gap_m) polyline(slice(pts, s, s + dash_m), colour, thickness);
   }
 
   // A small arrow in the middle of a centre line, pointing in the driving direction.
   void directionArrow(const Polyline& pts, const cv::Scalar& colour) {
-    const double total = length(pts);
+    const double total = geo::polylineLength(pts);
     const double arrow = std::max(2.0, metres(10));
     if (total < 2.0 * arrow) return;
     const Polyline piece = slice(pts, 0.5 * total - 0.5 * arrow, 0.5 * total + 0.5 * arrow);

@@ -1,6 +1,7 @@
 #include "core/sim/drive.h"
 
 #include "core/config/yaml_reader.h"
+#include "core/geo/polyline.h"
 
 #include <algorithm>
 #include <cmath>
@@ -54,12 +55,6 @@ struct LaneGraph {
     return false;
   }
 };
-
-double polylineLength(const std::vector<Eigen::Vector3d>& pts) {
-  double len = 0.0;
-  for (size_t i = 1; i < pts.size(); ++i) len += (pts[i] - pts[i - 1]).head<2>().norm();
-  return len;
-}
 
 // Point of a polyline at arc length s (clamped).
 Eigen::Vector2d pointAt(const std::vector<Eigen::Vector3d>& pts, double s) {
@@ -132,7 +127,7 @@ std::vector<int64_t> roadsBetween(const skeleton::Skeleton& sk, const LaneGraph&
 // Neighbour lanelets of a road lanelet: same road, next lane left or right, running beside it.
 std::vector<const Lanelet*> neighbours(const LaneGraph& g, const Lanelet& l) {
   std::vector<const Lanelet*> out;
-  const Eigen::Vector2d mid = pointAt(l.centre, 0.5 * polylineLength(l.centre));
+  const Eigen::Vector2d mid = pointAt(l.centre, 0.5 * geo::polylineLengthXy(l.centre));
   for (const Lanelet* n : g.by_road.at(l.road_id)) {
     if (std::abs(n->index_from_left - l.index_from_left) != 1) continue;
     if ((pointAt(n->centre, project(n->centre, mid)) - mid).norm() > 5.0) continue;
@@ -154,7 +149,7 @@ std::vector<LanePlan::Leg> autoLanes(const skeleton::Skeleton& sk, const LaneGra
     if (l.kind != LaneletKind::kRoad || l.road_id < 0 || !sk.road(l.road_id)) continue;
     const auto* road = sk.road(l.road_id);
     const auto* end = sk.intersection(road->to);
-    if (road->length > 40.0 && polylineLength(l.centre) > 20.0 && end && !end->dead_end) starts.push_back(&l);
+    if (road->length > 40.0 && geo::polylineLengthXy(l.centre) > 20.0 && end && !end->dead_end) starts.push_back(&l);
   }
   if (starts.empty()) throw RouteError("no road lane of 20 m or more to start a drive on");
   std::vector<LanePlan::Leg> best;
@@ -165,15 +160,15 @@ std::vector<LanePlan::Leg> autoLanes(const skeleton::Skeleton& sk, const LaneGra
     const Lanelet* cur = starts[rng() % starts.size()];
     double len = 0.0;
     while (len < wanted && legs.size() < 2000) {
-      len += polylineLength(cur->centre);
+      len += geo::polylineLengthXy(cur->centre);
       roads_used[cur->road_id]++;
-      if (cur->kind == LaneletKind::kRoad && polylineLength(cur->centre) >= 40.0 &&
+      if (cur->kind == LaneletKind::kRoad && geo::polylineLengthXy(cur->centre) >= 40.0 &&
           uniform(rng) < o.lane_change_probability) {
         const auto ns = neighbours(g, *cur);
         if (!ns.empty()) {
           legs.push_back({cur->id, true});
           cur = ns[rng() % ns.size()];
-          len += polylineLength(cur->centre) * 0.5;
+          len += geo::polylineLengthXy(cur->centre) * 0.5;
           roads_used[cur->road_id]++;
         }
       }
@@ -211,7 +206,7 @@ std::vector<LanePlan::Leg> autoLanes(const skeleton::Skeleton& sk, const LaneGra
       const Option& chosen = pick[rng() % pick.size()];
       if (chosen.via) {
         legs.push_back({chosen.via->id, false});
-        len += polylineLength(chosen.via->centre);
+        len += geo::polylineLengthXy(chosen.via->centre);
       }
       cur = chosen.next;
     }
@@ -269,7 +264,7 @@ std::vector<LanePlan::Leg> planLanes(const LaneGraph& g, const std::vector<int64
     furthest_stage = std::max(furthest_stage, st.second);
     const Lanelet* l = g.get(st.first);
     const int stage = st.second;
-    const double w = polylineLength(l->centre) * cost_factor[l->id];
+    const double w = geo::polylineLengthXy(l->centre) * cost_factor[l->id];
     bool has_same_road_successor = false;
     for (int64_t sid : l->successors) {
       const Lanelet* n = g.get(sid);
@@ -296,7 +291,7 @@ std::vector<LanePlan::Leg> planLanes(const LaneGraph& g, const std::vector<int64
       break;
     }
     // Lane changes: neighbour lanes of the same road that run beside this one.
-    if (polylineLength(l->centre) < 15.0) continue;  // too short to change lanes
+    if (geo::polylineLengthXy(l->centre) < 15.0) continue;  // too short to change lanes
     for (const Lanelet* n : neighbours(g, *l)) relax(st, {n->id, stage}, lane_change_penalty + 0.5 * w, true);
   }
   if (!goal) {
@@ -398,7 +393,7 @@ Trajectory::Trajectory(const map::LaneMap& truth, const World& world, const Lane
   for (size_t i = 0; i < plan.legs.size(); ++i) {
     const Lanelet* a = g.get(plan.legs[i].lanelet);
     if (!a || a->centre.size() < 2) throw RouteError("lanelet " + std::to_string(plan.legs[i].lanelet) + " has no centre line");
-    const double len_a = polylineLength(a->centre);
+    const double len_a = geo::polylineLengthXy(a->centre);
     if (plan.legs[i].lane_change_to_next && i + 1 < plan.legs.size()) {
       const Lanelet* b = g.get(plan.legs[i + 1].lanelet);
       const double available = len_a - entry_s;

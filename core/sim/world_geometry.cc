@@ -30,12 +30,6 @@ Vector2d safeNormalized(const Vector2d& v, const Vector2d& fallback) {
 
 }  // namespace
 
-double polylineLength(const std::vector<Vector2d>& pts) {
-  double len = 0.0;
-  for (size_t i = 1; i < pts.size(); ++i) len += (pts[i] - pts[i - 1]).norm();
-  return len;
-}
-
 double smoothstep(double x) {
   x = std::clamp(x, 0.0, 1.0);
   return x * x * (3.0 - 2.0 * x);

@@ -3,6 +3,8 @@
 // point-in-polygon and rectangle distances.
 #pragma once
 
+#include "core/geo/polyline.h"
+
 #include <Eigen/Core>
 
 #include <vector>
@@ -12,7 +14,8 @@ namespace lanemap::sim::geom {
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
-inline double cross(const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+using geo::cross;           // core/geo/polyline.h
+using geo::polylineLength;  // core/geo/polyline.h
 
 // A polyline with cumulative arc lengths, unit tangents and left normals at its points.
 class RefLine {
@@ -42,7 +45,6 @@ class RefLine {
   std::vector<Vector2d> t_;  // per-point tangents (central differences)
 };
 
-double polylineLength(const std::vector<Vector2d>& pts);
 // Smooth 0 -> 1 over x in [0, 1] (clamped), zero slope at both ends.
 double smoothstep(double x);
 

@@ -16,6 +16,7 @@
 //  6. ROI polygons and s_begin / s_end;
 //  7. the spatial index.
 #include "core/skeleton/skeleton.h"
+#include "core/geo/polyline.h"
 
 #include <algorithm>
 #include <cmath>
@@ -40,7 +41,7 @@ double wrapAngle(double a) {
   return a - kPi;
 }
 
-double cross2(const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+using geo::cross;  // core/geo/polyline.h
 
 std::vector<double> cumulativeLengths(const std::vector<Vector2d>& pts) {
   std::vector<double> cum(pts.size(), 0.0);
@@ -300,10 +301,10 @@ std::vector<double> polygonCrossings(const std::vector<Vector2d>& pts, const std
     for (size_t k = 0; k < poly.size(); ++k) {
       const Vector2d q = poly[k];
       const Vector2d e = poly[(k + 1) % poly.size()] - q;
-      const double denom = cross2(r, e);
+      const double denom = cross(r, e);
       if (std::abs(denom) < 1e-12) continue;
-      const double t = cross2(q - p, e) / denom;
-      const double u = cross2(q - p, r) / denom;
+      const double t = cross(q - p, e) / denom;
+      const double u = cross(q - p, r) / denom;
       if (t >= 0 && t <= 1 && u >= 0 && u <= 1) out.push_back(cum[i] + t * r.norm());
     }
   }

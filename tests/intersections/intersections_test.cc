@@ -9,6 +9,7 @@
 // C = node 1 at (0, 0); S = 2 at (0, -120), N = 3 at (0, 120), W = 4 at (-120, 0), E = 5 at (120, 0)
 // (crossings: shape nodes 12 m from C).
 // A pair is (in road's from node, in lane index from the left, out road's to node, out lane index).
+#include "core/geo/polyline.h"
 #include "core/intersections/intersections.h"
 
 #include "core/io/lanelet2.h"
@@ -151,12 +152,7 @@ TEST(IntersectionCurve, BoundsOfASharpTurnStayOnTheirSides) {
   m.lanelets.push_back(ll);
   EXPECT_TRUE(lanemap::io::orientationProblems(m).empty());
   // The outer (left) bound of a right turn is the longer one.
-  const auto length = [](const std::vector<Vector2d>& p) {
-    double l = 0;
-    for (size_t i = 1; i < p.size(); ++i) l += (p[i] - p[i - 1]).norm();
-    return l;
-  };
-  EXPECT_GT(length(b.left), 2.0 * length(b.right));
+  EXPECT_GT(lanemap::geo::polylineLength(b.left), 2.0 * lanemap::geo::polylineLength(b.right));
 }
 
 TEST(IntersectionCurve, TurnDirectionFromTheHeadingChange) {

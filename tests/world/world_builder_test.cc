@@ -1,6 +1,7 @@
 // The simulator's world built from west-oakland.osm: lane counts follow the OSM tags, lane widths,
 // shared boundaries, successor continuity, what sample() and height() return, obstacles, and
 // determinism for a seed.
+#include "core/geo/polyline.h"
 #include "core/osm/osm_data.h"
 #include "core/sim/world_builder.h"
 #include "core/skeleton/skeleton.h"
@@ -39,12 +40,6 @@ WorldOptions optionsWithSeed(uint64_t seed, bool flat = false) {
 const SimWorld& world() {
   static const std::unique_ptr<SimWorld> w = buildWorld(oakland(), optionsWithSeed(3));
   return *w;
-}
-
-double polylineLength(const std::vector<Vector3d>& p) {
-  double l = 0.0;
-  for (size_t i = 1; i < p.size(); ++i) l += (p[i] - p[i - 1]).head<2>().norm();
-  return l;
 }
 
 double distToPolyline(const Vector2d& q, const std::vector<Vector3d>& p) {
@@ -306,8 +301,8 @@ TEST(World, SampleAtALaneCentreIsThatLanelet) {
   const SimWorld& w = world();
   int ok = 0, n = 0;
   for (const auto& l : w.truth().lanelets) {
-    if (l.kind != LaneletKind::kRoad || polylineLength(l.centre) < 8.0) continue;
-    const Vector2d c = pointAtLength(l.centre, polylineLength(l.centre) / 2.0);
+    if (l.kind != LaneletKind::kRoad || geo::polylineLengthXy(l.centre) < 8.0) continue;
+    const Vector2d c = pointAtLength(l.centre, geo::polylineLengthXy(l.centre) / 2.0);
     const GroundSample g = w.sample(c.x(), c.y());
     ++n;
     if (g.lanelet == l.id && g.surface == Surface::kAsphalt) ++ok;
@@ -329,7 +324,7 @@ TEST(World, SampleOnABoundaryIsItsPaintUnlessWornOrMissing) {
   int painted = 0, bare = 0, n = 0, wrong = 0;
   for (const auto& ls : w.truth().lines) {
     if (ls.type != LineType::kSolid && ls.type != LineType::kDashed && ls.type != LineType::kSolidSolid) continue;
-    const double L = polylineLength(ls.points);
+    const double L = geo::polylineLengthXy(ls.points);
     if (L < 20.0) continue;
     // Mid-dash station near the middle (dashes: [k*9, k*9+3]), away from crosswalks at the ends.
     const double s = std::floor(L / 2.0 / kDashPeriod) * kDashPeriod + kDashLength / 2.0;
@@ -423,7 +418,7 @@ TEST(World, GradesStayBelowTenPercent) {
   const SimWorld& w = world();
   double worst = 0.0, range_lo = 1e9, range_hi = -1e9;
   for (const auto& l : w.truth().lanelets) {
-    const double L = polylineLength(l.centre);
+    const double L = geo::polylineLengthXy(l.centre);
     for (double s = 0.0; s + 5.0 <= L; s += 2.5) {
       const Vector2d a = pointAtLength(l.centre, s), b = pointAtLength(l.centre, s + 5.0);
       const double run = (b - a).norm();

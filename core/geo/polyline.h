@@ -1,0 +1,27 @@
+// Polyline helpers shared by the mapping, the simulator, the evaluation and the map writers: the
+// length of a polyline (in the plane, in 3-D, or of a 3-D polyline's xy projection), and the plane
+// cross product and unit vector.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <vector>
+
+namespace lanemap::geo {
+
+// Sum of the segment lengths; 0 for fewer than 2 points.
+double polylineLength(const std::vector<Eigen::Vector2d>& pts);
+double polylineLength(const std::vector<Eigen::Vector3d>& pts);  // 3-D segment lengths
+// The length of the polyline's projection on the xy plane (z ignored).
+double polylineLengthXy(const std::vector<Eigen::Vector3d>& pts);
+
+// The z component of the 3-D cross product of a and b: > 0 when b turns left of a.
+inline double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// v / |v|, or `fallback` when v is (nearly) zero.
+inline Eigen::Vector2d unit(const Eigen::Vector2d& v, const Eigen::Vector2d& fallback) {
+  const double n = v.norm();
+  return n > 1e-12 ? Eigen::Vector2d(v / n) : fallback;
+}
+
+}  // namespace lanemap::geo

@@ -104,30 +104,48 @@ struct Raster {
 // between two neighbouring lines lane_width_min_m to lane_width_max_m apart, the strip is a lane
 // (its blocked cells become drivable) when one of the lines is dashed (a dashed line only ever
 // separates two lanes of one direction) or the strip is drivable in 20 % of its cells somewhere
-// in the bin (a lane the segmentation named, between a curb and a solid line). A parking strip
-// or a cycle track between a solid line and a curb is never labelled a lane.
+// in the bin (a lane the segmentation named, between a curb and a solid line), or the strip holds
+// the one-way road's own line, or it is the strip beside a two-way road's divider (the lane next to
+// the centre of a street is a traffic lane, never parking). A parking strip or a cycle track
+// between a solid line and a curb is never labelled a lane. A solid line or curb at a slant to the
+// road's frame (the OSM line of a ring or a bend is not parallel to the kerbs) spreads over
+// several columns, none of which holds it in 30 % of the rows: a row's edge cell counts for every
+// column within line_tolerance_m of it, and the widths are measured between the lines as found.
 void markUnnamedLanes(Raster& r, const ExplorerOptions& o, bool two_way) {
   const int bin_rows = std::max(1, static_cast<int>(std::round(o.divider_bin_m / r.res)));
   const int min_cols = static_cast<int>(std::round(o.lane_width_min_m / r.res));
   const int max_cols = static_cast<int>(std::round(o.lane_width_max_m / r.res));
-  std::vector<float> dashed(r.nd), edge(r.nd), good(r.nd);
+  const int tol = std::max(0, static_cast<int>(std::round(o.line_tolerance_m / r.res)));
+  std::vector<float> dashed(r.nd), edge(r.nd), good(r.nd), outside(r.nd);
+  std::vector<int> ed_row(r.nd + 1);  // one row's edge cells, prefix sums
   for (int i0 = 0; i0 < r.ns; i0 += bin_rows) {
     const int i1 = std::min(r.ns, i0 + bin_rows);
     const float n = static_cast<float>(i1 - i0);
-    for (int j = 0; j < r.nd; ++j) {
-      int da = 0, ed = 0, go = 0;
-      for (int i = i0; i < i1; ++i) {
+    std::fill(dashed.begin(), dashed.end(), 0.0f);
+    std::fill(edge.begin(), edge.end(), 0.0f);
+    std::fill(good.begin(), good.end(), 0.0f);
+    std::fill(outside.begin(), outside.end(), 0.0f);
+    for (int i = i0; i < i1; ++i) {
+      for (int j = 0; j < r.nd; ++j) {
         const uint8_t c = r.at(i, j);
-        da += c == kDashed;
-        ed += c == kSolid || c == kCurb || c == kOutside;  // the divider of a two-way road too
-        go += c == kDrivable;
+        dashed[j] += c == kDashed;
+        good[j] += c == kDrivable;
+        outside[j] += c == kOutside;
+        ed_row[j + 1] = ed_row[j] + (c == kSolid || c == kCurb || c == kOutside);  // the divider of a two-way road too
       }
-      dashed[j] = da / n;
-      edge[j] = ed / n;
-      good[j] = go / n;
+      for (int j = 0; j < r.nd; ++j) {
+        edge[j] += ed_row[std::min(r.nd, j + tol + 1)] - ed_row[std::max(0, j - tol)] > 0;
+      }
     }
-    // Painted lines of the bin, left to right in d: runs of marked columns.
-    struct Paint { int j0, j1; bool dashed; };
+    for (int j = 0; j < r.nd; ++j) {
+      dashed[j] /= n;
+      edge[j] /= n;
+      good[j] /= n;
+      outside[j] /= n;
+    }
+    // Painted lines of the bin, left to right in d: runs of marked columns; `divider`: the run is
+    // the edge of our direction's carriageway at a two-way road's divider (outside beyond it).
+    struct Paint { int j0, j1; bool dashed, divider; };
     std::vector<Paint> lines;
     for (int j = 0; j < r.nd; ++j) {
       const bool d = dashed[j] >= 0.1f, e = edge[j] >= 0.3f;
@@ -136,22 +154,33 @@ void markUnnamedLanes(Raster& r, const ExplorerOptions& o, bool two_way) {
         lines.back().j1 = j;
         lines.back().dashed = lines.back().dashed || d;
       } else {
-        lines.push_back({j, j, d});
+        lines.push_back({j, j, d, false});
       }
+    }
+    if (two_way && !lines.empty()) {
+      // Beyond the divider everything is outside up to the corridor's edge: on the left of our
+      // lanes in right-hand traffic (the last run), on the right in left-hand traffic (the first).
+      Paint& ln = o.right_hand_traffic ? lines.back() : lines.front();
+      const int edge_col = o.right_hand_traffic ? r.nd - 1 : 0;
+      ln.divider = (o.right_hand_traffic ? ln.j1 : ln.j0) == edge_col && outside[edge_col] >= 0.9f;
     }
     for (size_t k = 0; k + 1 < lines.size(); ++k) {
       const Paint& a = lines[k];
       const Paint& b = lines[k + 1];
-      const int gap = b.j0 - a.j1;
+      // Between the lines as found: a run widened by the slant tolerance is that much narrower.
+      const int gap = b.j0 - a.j1 + 2 * tol;
       if (gap < min_cols || gap > max_cols) continue;
       float good_sum = 0.0f;
       for (int j = a.j1 + 1; j < b.j0; ++j) good_sum += good[j];
       // The one-way road's own line runs between them: a single lane (a slip road, a link between
       // islands), whatever the segmentation named.
       const bool on_road = !two_way && a.j1 < r.col(0.0) && b.j0 > r.col(0.0);
-      if (!a.dashed && !b.dashed && !on_road && good_sum < 0.2f * (b.j0 - a.j1 - 1)) continue;
+      // Beside a two-way road's divider, on our side: the street's lane our way.
+      const bool beside_divider = two_way && (o.right_hand_traffic ? b.divider : a.divider);
+      if (!a.dashed && !b.dashed && !on_road && !beside_divider && good_sum < 0.2f * (b.j0 - a.j1 - 1)) continue;
+      const int ja = std::max(a.j0, a.j1 - tol) + 1, jb = std::min(b.j1, b.j0 + tol);
       for (int i = i0; i < i1; ++i) {
-        for (int j = a.j1 + 1; j < b.j0; ++j) {
+        for (int j = ja; j < jb; ++j) {
           uint8_t& c = r.code[static_cast<size_t>(i) * r.nd + j];
           if (c == kBlocked) c = kDrivable;
         }

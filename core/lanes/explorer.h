@@ -8,8 +8,9 @@
 //    blocked (observed, not drivable), lane separation, dashed, solid, curb, or outside our
 //    direction (beyond the divider of a two-way road). A cell seen drivable drivable_min_count
 //    times is drivable (frames taken in a junction label the roads around it background); a
-//    blocked strip a lane wide between painted lines (one dashed, or drivable somewhere along the bin) is a
-//    lane the segmentation does not name (beyond its +-2 lane classes, or seen from the junction
+//    blocked strip a lane wide between painted lines (one dashed, or drivable somewhere along the
+//    bin, or holding a one-way road's line, or beside a two-way road's divider; a kerb at a slant
+//    to the frame counts within line_tolerance_m) is a lane the segmentation does not name (beyond its +-2 lane classes, or seen from the junction
 //    before the road: the lane classes are the ego lane's cross-section's only). Only the
 //    explored stretch kills a particle (past the ROI edges lie the junctions). A road whose stretch between its ROIs is shorter than
 //    short_road_min_m is explored over that much around its middle (explorationStretch).

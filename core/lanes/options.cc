@@ -45,6 +45,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("unnamed_lanes", o.unnamed_lanes);
   r.read("lane_width_min_m", o.lane_width_min_m);
   r.read("lane_width_max_m", o.lane_width_max_m);
+  r.read("line_tolerance_m", o.line_tolerance_m);
   r.read("birth_every_m", o.birth_every_m);
   r.read("birth_min_free_m", o.birth_min_free_m);
   r.read("birth_min_evidence", o.birth_min_evidence);
@@ -93,6 +94,7 @@ void ExplorerOptions::validate() const {
   need(divider_search_m >= 0 && divider_bin_m > 0, "divider_search_m, divider_bin_m");
   need(carriageway_wall_m > 0, "carriageway_wall_m > 0");
   need(lane_width_min_m > 0 && lane_width_max_m >= lane_width_min_m, "0 < lane_width_min_m <= lane_width_max_m");
+  need(line_tolerance_m >= 0 && line_tolerance_m < 0.5 * lane_width_min_m, "0 <= line_tolerance_m < lane_width_min_m / 2");
   need(birth_every_m > 0 && birth_min_free_m >= 0 && birth_particles >= 1, "births");
   need(birth_min_evidence >= 0 && birth_min_evidence <= 1, "birth_min_evidence in [0, 1]");
   need(dbscan_eps_m > 0 && dbscan_min_points >= 1, "dbscan");

@@ -60,6 +60,8 @@ struct ExplorerOptions {
                                          //   blocked strip between painted lines (one dashed) is a lane
   double lane_width_min_m = 2.4;         // ... when the lines are this far apart ...
   double lane_width_max_m = 4.6;         // ... at most
+  double line_tolerance_m = 0.3;         // ... a solid line or curb within this of a column in a row
+                                         //   counts for that column (lines at a slant to the frame)
 
   // --- clustering and lanes ---
   double dbscan_eps_m = 1.0;             // the paper's value

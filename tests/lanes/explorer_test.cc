@@ -521,3 +521,69 @@ TEST(Explorer, LaneBesideAnUnseenKerbIsWhole) {
 }
 
 }  // namespace
+
+namespace {
+
+// A short road explored as lanemap-offline does: ROIs that leave s_begin..s_end of the polyline.
+ExplorationResult exploreShort(const Layout& layout, double s_begin, double s_end, bool two_way,
+                               const ExplorerOptions& opt = {}) {
+  const bev::BevGrid grid = paint(layout);
+  RoadGeometry road;
+  road.road_id = 11;
+  road.polyline = layout.ref.polyline(2.0);
+  road.s_begin = s_begin;
+  road.s_end = s_end;
+  road.two_way = two_way;
+  return exploreRoad(grid, road, opt);
+}
+
+}  // namespace
+
+// Issue 16, a one-lane section of a roundabout's ring (the benchmark's Perth peanut roundabout,
+// road 11): 12 m of road whose ROIs leave 1.2 m of it, nothing labelled drivable (every frame of
+// it taken in the junctions), only its kerbs seen, over 5 m, 3.7 m apart and at a slant of 0.12 m
+// per metre to the OSM line (a ring's way is not parallel to its kerbs). No column of the raster
+// holds a kerb in 30 % of a bin's rows, so the strip between them was no lane: the road came out
+// with no lane at all (0 lanes on the old code). A kerb within line_tolerance_m of a column counts
+// for it: the one lane between the kerbs, following them.
+TEST(Explorer, RingSectionBetweenSlantedKerbs) {
+  Layout L;
+  L.ref.length = 12.0;
+  auto kerb = [](double d0) { return [d0](double s) { return d0 + 0.12 * (s - 6.0); }; };
+  L.lines.push_back({kerb(1.85), 3.5, 8.5, Line::kCurb, false});
+  L.lines.push_back({kerb(-1.85), 3.5, 8.5, Line::kCurb, false});
+  L.observed_half_width = 11.0;
+  const ExplorationResult res = exploreShort(L, 5.4, 6.6, false);
+  ASSERT_EQ(res.lanes.size(), 1u);
+  const Lane& lane = res.lanes[0];
+  EXPECT_GE(lane.s_end - lane.s_begin, 0.8 * 6.0);
+  for (const auto& p : lane.waypoints) {
+    const Eigen::Vector2d sd = L.ref.toSD(p);
+    EXPECT_NEAR(sd.y(), 0.12 * (sd.x() - 6.0), 0.35) << "at s " << sd.x();
+  }
+  EXPECT_EQ(lane.left.type, map::LineType::kCurb);
+  EXPECT_EQ(lane.right.type, map::LineType::kCurb);
+  ExplorerOptions straight;
+  straight.line_tolerance_m = 0.0;
+  const ExplorationResult without = exploreShort(L, 5.4, 6.6, false, straight);
+  for (const Lane& l : without.lanes) {
+    EXPECT_GT(std::abs(without.frame->toFrenet(l.waypoints[l.waypoints.size() / 2]).y()), 3.0)
+        << "without the tolerance no lane lies between the kerbs";
+  }
+}
+
+// Issue 16, a two-way link of one lane each way between close junctions (the benchmark's Perth
+// road 15): 20 m, ROIs leaving 0.2 m of it, seen only from the junctions (observed, no lane class:
+// blocked), a double solid centre line and a solid edge line 3.3 m right of it. No dashed line and
+// no drivable evidence, so the strip was no lane (0 lanes on the old code); the strip beside a
+// two-way road's divider is the street's lane our way.
+TEST(Explorer, TwoWayLinkSeenOnlyFromTheJunctions) {
+  Scenario sc = straightLanes({3.3}, 20.0, 0.0, true);
+  sc.layout.areas.clear();  // nothing labelled drivable
+  const ExplorationResult res = exploreShort(sc.layout, 9.9, 10.1, true);
+  ASSERT_EQ(res.lanes.size(), 1u);
+  const Lane& lane = res.lanes[0];
+  EXPECT_GE(lane.s_end - lane.s_begin, 0.8 * 6.0);
+  for (const auto& p : lane.waypoints) EXPECT_NEAR(sc.layout.ref.toSD(p).y(), sc.truth[0].d(0), 0.25);
+  EXPECT_EQ(lane.right.type, map::LineType::kSolid);
+}

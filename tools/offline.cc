@@ -46,9 +46,9 @@
 #include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
 #include "core/lanes/options.h"
-#include "core/mapping/lane_confidence.h"
 #include "core/mapping/map_assembler.h"
 #include "core/mapping/partial_road.h"
+#include "core/mapping/road_lanes.h"
 #include "core/osm/osm_data.h"
 #include "core/seg/segmenter.h"
 #include "core/skeleton/skeleton.h"
@@ -306,15 +306,7 @@ class OfflineMapper {
     if (partial) entry["partial"] = {{"station_m", partial->station_m}, {"road_length_m", partial->road_length_m}};
     try {
       const auto geometry = partial ? mapping::drivenStretch(*r, partial->station_m, explorer_) : lanes::RoadGeometry::fromSkeleton(*r);
-      const auto res = lanes::exploreRoad(grid, geometry, explorer_);
-      const auto& origin = sk_.frame().origin();
-      map::LaneMap lanes_of_road = lanes::toLaneMap(res, origin.lat, origin.lon, origin.alt);
-      mapping::setConfidence(lanes_of_road, res, mapping::laneConfidences(grid, res, explorer_));
-      if (partial) {
-        mapping::markPartial(lanes_of_road, *partial);  // its lanes end where the car stopped: no stop line there
-      } else {
-        lanes::addStopLines(grid, lanes_of_road);  // stop lines the BEV saw at the lanes' ends
-      }
+      auto [res, lanes_of_road] = mapping::exploreRoadLanes(grid, geometry, partial, explorer_, sk_.frame().origin());
       crosswalks_[road_id] = lanes::findCrosswalks(grid, lanes_of_road, 1);
       assembler_.setRoad(road_id, std::move(lanes_of_road));
       ++roads_mapped_;

@@ -126,22 +126,14 @@ IdPlan planIds(const LaneMap& map) {
   std::set<int64_t> used;
   bool keep = true;
   int64_t max_id = 0;
-  for (const auto& l : map.lines) {
-    keep = keep && l.id > 0 && used.insert(l.id).second;
-    max_id = std::max(max_id, l.id);
-  }
-  for (const auto& ll : map.lanelets) {
-    keep = keep && ll.id > 0 && used.insert(ll.id).second;
-    max_id = std::max(max_id, ll.id);
-  }
-  for (const auto& r : map.regulatory_elements) {
-    keep = keep && r.id > 0 && used.insert(r.id).second;
-    max_id = std::max(max_id, r.id);
-  }
-  for (const auto& c : map.crosswalks) {
-    keep = keep && c.id > 0 && used.insert(c.id).second;
-    max_id = std::max(max_id, c.id);
-  }
+  auto take = [&](int64_t id) {
+    keep = keep && id > 0 && used.insert(id).second;
+    max_id = std::max(max_id, id);
+  };
+  for (const auto& l : map.lines) take(l.id);
+  for (const auto& ll : map.lanelets) take(ll.id);
+  for (const auto& r : map.regulatory_elements) take(r.id);
+  for (const auto& c : map.crosswalks) take(c.id);
   int64_t next = 1;
   for (const auto& l : map.lines) plan.way_of_line[l.id] = keep ? l.id : next++;
   for (const auto& ll : map.lanelets) plan.relation_of_lanelet[ll.id] = keep ? ll.id : next++;

@@ -26,9 +26,9 @@
 #include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
 #include "core/lanes/stop_lines.h"
-#include "core/mapping/lane_confidence.h"
 #include "core/mapping/map_assembler.h"
 #include "core/mapping/partial_road.h"
+#include "core/mapping/road_lanes.h"
 #include "core/skeleton/skeleton.h"
 #include "lanemap/bev_road_t.hpp"
 #include "lanemap/lane_map_t.hpp"
@@ -132,16 +132,10 @@ class LaneMapperApp {
         return;
       }
     }
-    const lanes::ExplorationResult res = lanes::exploreRoad(grid, geometry, options_);
-    const auto& o = sk_->frame().origin();
-    map::LaneMap m = lanes::toLaneMap(res, o.lat, o.lon, o.alt);
-    mapping::setConfidence(m, res, mapping::laneConfidences(grid, res, options_));  // per lane, 0..1
-    if (partial) {
-      mapping::markPartial(m, map::PartialRoad{partial->station_m, partial->road_length_m});  // no stop line where the car stopped
-      process_.counters().add("roads_partial");
-    } else {
-      lanes::addStopLines(grid, m);  // stop lines the BEV saw at the lanes' ends
-    }
+    const std::optional<map::PartialRoad> driven_to =
+        partial ? std::optional<map::PartialRoad>(map::PartialRoad{partial->station_m, partial->road_length_m}) : std::nullopt;
+    auto [res, m] = mapping::exploreRoadLanes(grid, geometry, driven_to, options_, sk_->frame().origin());
+    if (partial) process_.counters().add("roads_partial");
     int64_t next_id = 1;
     for (const auto& l : m.lines) next_id = std::max(next_id, l.id + 1);
     for (const auto& l : m.lanelets) next_id = std::max(next_id, l.id + 1);

@@ -98,6 +98,17 @@ std::map<std::string, int64_t> logModeCounters(const std::string& drive, const s
   return c;
 }
 
+// The drive's truth on the roads it drove, and the truth file's ENU origin.
+struct DrivenTruth {
+  lanemap::geo::LatLonAlt origin;
+  lanemap::map::LaneMap driven;
+};
+DrivenTruth drivenTruth(const std::string& drive) {
+  const auto origin = lanemap::eval::lanelet2Origin(drive + "/groundtruth.osm");
+  const auto truth = lanemap::io::readLanelet2(drive + "/groundtruth.osm", origin.lat, origin.lon);
+  return {origin, lanemap::eval::restrictToRoads(truth, lanemap::eval::drivenRoadsFromScenario(drive + "/scenario.json"))};
+}
+
 Statuses runGraph(const std::string& drive, const std::string& dir, double drop) {
   Statuses st;
   fs::create_directories(dir);
@@ -123,9 +134,7 @@ TEST(LossyBus, TenAndThirtyPercentLostAreCountedAndTheDrivenRoadIsStillMapped) {
   }
   const std::string drive = lt::sharedSimDrive("osm/west-oakland.osm", lt::kBevDriveSeconds, lt::kBevDriveSeed, lt::kBevDriveArgs);
   ASSERT_FALSE(drive.empty());
-  const auto origin = lanemap::eval::lanelet2Origin(drive + "/groundtruth.osm");
-  const auto truth = lanemap::io::readLanelet2(drive + "/groundtruth.osm", origin.lat, origin.lon);
-  const auto driven = lanemap::eval::restrictToRoads(truth, lanemap::eval::drivenRoadsFromScenario(drive + "/scenario.json"));
+  const auto [origin, driven] = drivenTruth(drive);
   ASSERT_FALSE(driven.lanelets.empty());
 
   lt::TempDir out("lossy-bus");
@@ -226,9 +235,7 @@ lanemap::eval::EvalReport mapOffline(const std::string& drive, const std::string
 TEST(LossyBus, TenPercentLostOverTenLossSeedsGivesTheLosslessLanesButOnce) {
   const std::string drive = lt::sharedSimDrive("osm/west-oakland.osm", lt::kBevDriveSeconds, lt::kBevDriveSeed, lt::kBevDriveArgs);
   ASSERT_FALSE(drive.empty());
-  const auto origin = lanemap::eval::lanelet2Origin(drive + "/groundtruth.osm");
-  const auto truth = lanemap::io::readLanelet2(drive + "/groundtruth.osm", origin.lat, origin.lon);
-  const auto driven = lanemap::eval::restrictToRoads(truth, lanemap::eval::drivenRoadsFromScenario(drive + "/scenario.json"));
+  const auto [origin, driven] = drivenTruth(drive);
   ASSERT_FALSE(driven.lanelets.empty());
   lt::TempDir out("lossy-offline");
   const auto lossless = mapOffline(drive, drive + "/drive.lcmlog", out.str("lossless"), driven, origin);

@@ -1,5 +1,6 @@
 // LANE_MAP (lane_map_t: one road's lanes) to and from the core's map::LaneMap: the lane mapper
-// publishes with toMessage, the viewer (and anything else on the bus) reads with fromMessage.
+// publishes with toMessage, the viewer (and anything else on the bus) reads with fromMessage. The
+// lanes' confidence and a partial road's stop station go over the bus too (-1 on the bus: none).
 #pragma once
 
 #include "core/map/lane_map.h"
@@ -8,6 +9,7 @@
 #include "lanemap/polyline_t.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -66,7 +68,12 @@ inline lane_map_t toMessage(int64_t road_id, const map::LaneMap& m, int64_t utim
   msg.origin_latitude = m.origin_lat;
   msg.origin_longitude = m.origin_lon;
   msg.origin_altitude = m.origin_alt;
+  msg.partial_station_m = msg.partial_road_length_m = -1.0;
   for (const auto& ll : m.lanelets) {
+    if (ll.partial) {  // the road's: every lanelet of a partial road carries the same
+      msg.partial_station_m = ll.partial->station_m;
+      msg.partial_road_length_m = ll.partial->road_length_m;
+    }
     lane_t lane;
     lane.lane_id = ll.id;
     lane.index_from_left = ll.index_from_left;
@@ -77,6 +84,7 @@ inline lane_map_t toMessage(int64_t road_id, const map::LaneMap& m, int64_t utim
     lane.right_boundary = r ? toPolyline(r->points, polylineType(r->type)) : toPolyline({}, polyline_t::TYPE_UNKNOWN);
     lane.successors = ll.successors;
     lane.num_successors = static_cast<int32_t>(ll.successors.size());
+    lane.confidence = ll.confidence ? *ll.confidence : -1.0;
     msg.lanes.push_back(std::move(lane));
   }
   msg.num_lanes = static_cast<int32_t>(msg.lanes.size());
@@ -106,6 +114,10 @@ inline map::LaneMap fromMessage(const lane_map_t& msg, const skeleton::Skeleton&
     ll.index_from_left = lane.index_from_left;
     ll.centre = points(lane.centre);
     ll.successors = lane.successors;
+    if (std::isfinite(lane.confidence) && lane.confidence >= 0.0) ll.confidence = std::min(1.0, lane.confidence);
+    if (std::isfinite(msg.partial_station_m) && msg.partial_station_m >= 0.0) {
+      ll.partial = map::PartialRoad{msg.partial_station_m, std::max(msg.partial_station_m, msg.partial_road_length_m)};
+    }
     for (const polyline_t* b : {&lane.left_boundary, &lane.right_boundary}) {
       auto pts = points(*b);
       if (pts.size() < 2) continue;

@@ -1,10 +1,15 @@
 // LANE_MAP conversion (processes/framework/lane_map_message.h): what the lane mapper publishes the
-// viewer reads back: lanes, centre lines, bound geometry and types, successors.
+// viewer reads back: lanes, centre lines, bound geometry and types, successors, each lane's
+// confidence and a partial road's stop station.
 #include "processes/framework/lane_map_message.h"
 
 #include "core/osm/osm_data.h"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
 
 namespace lanemap {
 namespace {
@@ -83,6 +88,60 @@ TEST(LaneMapMessage, ALaneMapGoesOverTheBusAndBack) {
   lane_map_t bad = msg;
   bad.lanes[0].centre.num_points = 1000;
   EXPECT_EQ(fromMessage(bad, sk).lanelets[0].centre.size(), 2u);
+  // A map that says neither confidence nor partial: -1 on the bus, none back.
+  EXPECT_EQ(msg.lanes[0].confidence, -1.0);
+  EXPECT_EQ(msg.partial_station_m, -1.0);
+  EXPECT_FALSE(back.lanelets[0].confidence.has_value());
+  EXPECT_FALSE(back.lanelets[0].partial.has_value());
+}
+
+// The lane mapper's per-lane confidence and a road mapped as far as driven reach the viewer.
+TEST(LaneMapMessage, ConfidenceAndPartialRoadGoOverTheBus) {
+  map::LaneMap m;
+  m.lines = {line(1, map::LineType::kCurb, {{0, 0, 0}, {30, 0, 0}}), line(2, map::LineType::kDashed, {{0, 3.5, 0}, {30, 3.5, 0}}),
+             line(3, map::LineType::kSolid, {{0, 7, 0}, {30, 7, 0}})};
+  map::Lanelet a;
+  a.id = 800001;
+  a.right_id = 1;
+  a.left_id = 2;
+  a.centre = {{0, 1.75, 0}, {30, 1.75, 0}};
+  a.confidence = 0.86;
+  a.partial = map::PartialRoad{31.5, 120.0};
+  map::Lanelet b = a;
+  b.id = 800002;
+  b.right_id = 2;
+  b.left_id = 3;
+  b.centre = {{0, 5.25, 0}, {30, 5.25, 0}};
+  b.confidence = 0.33;
+  m.lanelets = {a, b};
+
+  const lane_map_t msg = toMessage(7, m, 1, "");
+  EXPECT_DOUBLE_EQ(msg.partial_station_m, 31.5);
+  EXPECT_DOUBLE_EQ(msg.partial_road_length_m, 120.0);
+  // Through the wire format, as the viewer gets it.
+  std::vector<uint8_t> wire(msg.getEncodedSize());
+  ASSERT_EQ(msg.encode(wire.data(), 0, static_cast<int>(wire.size())), static_cast<int>(wire.size()));
+  lane_map_t got;
+  ASSERT_EQ(got.decode(wire.data(), 0, static_cast<int>(wire.size())), static_cast<int>(wire.size()));
+
+  const auto sk = skeleton::Skeleton::build(osm::readOsm(std::string(LANEMAP_DATA_DIR) + "/osm/west-oakland.osm"));
+  const map::LaneMap back = fromMessage(got, sk);
+  ASSERT_EQ(back.lanelets.size(), 2u);
+  ASSERT_TRUE(back.lanelets[0].confidence && back.lanelets[1].confidence);
+  EXPECT_DOUBLE_EQ(*back.lanelets[0].confidence, 0.86);
+  EXPECT_DOUBLE_EQ(*back.lanelets[1].confidence, 0.33);
+  for (const auto& ll : back.lanelets) {
+    ASSERT_TRUE(ll.partial.has_value());
+    EXPECT_DOUBLE_EQ(ll.partial->station_m, 31.5);
+    EXPECT_DOUBLE_EQ(ll.partial->road_length_m, 120.0);
+  }
+  // Out of range on the bus: clamped to 1; NaN is none.
+  lane_map_t odd = got;
+  odd.lanes[0].confidence = 1.7;
+  odd.lanes[1].confidence = std::nan("");
+  const map::LaneMap clamped = fromMessage(odd, sk);
+  EXPECT_DOUBLE_EQ(*clamped.lanelets[0].confidence, 1.0);
+  EXPECT_FALSE(clamped.lanelets[1].confidence.has_value());
 }
 
 }  // namespace

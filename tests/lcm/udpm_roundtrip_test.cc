@@ -151,9 +151,11 @@ std::map<std::string, std::pair<std::string, std::vector<uint8_t>>> sampleMessag
   }
   lane.num_successors = 1;
   lane.successors = {7};
+  lane.confidence = 0.8;
   lm.lanes = {lane};
   lm.num_lanes = 1;
   lm.map_path = "/tmp/map.osm";
+  lm.partial_station_m = lm.partial_road_length_m = -1.0;
   out[channels::kLaneMap] = {"lanemap.lane_map_t", encode(lm)};
 
   status_t st;

@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <memory>
 
 namespace {
@@ -176,6 +177,40 @@ TEST(ViewerState, RoadLanesAppearInGeoJsonAndLanelet2) {
   { std::ofstream(path) << xml; }
   const map::LaneMap back = io::readLanelet2(path, sk->frame().origin().lat, sk->frame().origin().lon);
   EXPECT_EQ(back.lanelets.size(), 3u);
+}
+
+// The lane mapper's confidence per lane and a road mapped only as far as driven (LANE_MAP carries
+// both) are in the page's GeoJSON, which styles lanes by them.
+TEST(ViewerState, LaneConfidenceAndPartialRoadAreInTheGeoJson) {
+  auto sk = westOakland();
+  viewer::ViewerState state(sk);
+  const auto& road = longRoad(*sk);
+  map::LaneMap lanes = lanesAlong(*sk, road, 2);
+  lanes.lanelets[0].confidence = 0.9;
+  lanes.lanelets[1].confidence = 0.25;
+  for (auto& ll : lanes.lanelets) ll.partial = map::PartialRoad{40.0, road.s_end};
+  state.setRoadLanes(road.id, lanes);
+  const json g = json::parse(state.lanesGeoJson());
+  std::map<int64_t, double> confidence;
+  int partial = 0;
+  for (const auto& f : g["features"]) {
+    const auto& p = f["properties"];
+    if (p["feature"] != "lanelet") continue;
+    confidence[p["id"].get<int64_t>()] = p["confidence"].get<double>();
+    if (p["partial"] == true && p["partial_station_m"] == 40.0) ++partial;
+  }
+  ASSERT_EQ(confidence.size(), 2u);
+  EXPECT_DOUBLE_EQ(confidence[lanes.lanelets[0].id], 0.9);
+  EXPECT_DOUBLE_EQ(confidence[lanes.lanelets[1].id], 0.25);
+  EXPECT_EQ(partial, 2);
+  // Mapped whole on a later drive: no longer partial.
+  state.setRoadLanes(road.id, lanesAlong(*sk, road, 2));
+  for (const auto& f : json::parse(state.lanesGeoJson())["features"]) {
+    if (f["properties"]["feature"] == "lanelet") {
+      EXPECT_EQ(f["properties"]["partial"], false);
+      EXPECT_TRUE(f["properties"]["confidence"].is_null());
+    }
+  }
 }
 
 TEST(ViewerState, TwoMappedRoadsThroughAnIntersectionGetConnections) {

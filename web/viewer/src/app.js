@@ -60,7 +60,13 @@
       const p = f.properties;
       if (p.feature === 'lanelet') {
         const junction = p.kind === 'intersection';
-        return { stroke: false, fillColor: junction ? '#3d6fb6' : '#4a4f57', fillOpacity: junction ? 0.35 : 0.75 };
+        if (junction) return { stroke: false, fillColor: '#3d6fb6', fillOpacity: 0.35 };
+        // As opaque as the mapper is sure of the lane (0..1; none said: fully); a partial road's
+        // lanes (mapped as far as the drive went) outlined dashed.
+        const sure = typeof p.confidence === 'number' ? Math.max(0, Math.min(1, p.confidence)) : 1;
+        const style = { stroke: false, fillColor: '#4a4f57', fillOpacity: 0.2 + 0.55 * sure };
+        if (p.partial) Object.assign(style, { stroke: true, color: '#f08c00', weight: 2, dashArray: '6 4', opacity: 0.9 });
+        return style;
       }
       if (p.feature === 'centre_line') return { color: p.kind === 'intersection' ? '#1c4f99' : '#66d9e8', weight: 1.5, opacity: 0.9 };
       if (p.feature === 'regulatory_element') return { color: p.kind === 'traffic_light' ? '#f59f00' : '#e03131', weight: 4, opacity: 0.9 };

@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
     const auto sk = skeleton::Skeleton::build(osm::readOsm(osm_path), settings.map.skeleton);
     const auto* road = sk.road(road_id);
     if (!road) throw std::runtime_error("no atomic road " + std::to_string(road_id) + " in " + osm_path);
-    const lanes::ExplorerOptions& options = settings.explorer;
+    const lanes::ExplorerOptions options = settings.explorerOptions();
     const auto geometry = lanes::RoadGeometry::fromSkeleton(*road);
     const auto grid = bev::BevGrid::load(bev_path);
     const auto res = lanes::exploreRoad(grid, geometry, options, std::nullopt, history_path.empty() ? 0 : 5);

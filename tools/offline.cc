@@ -131,7 +131,7 @@ class OfflineMapper {
  public:
   OfflineMapper(const Options& o, const OfflineConfig& c, const skeleton::Skeleton& sk,
                 const std::vector<osm::Restriction>& restrictions, std::unique_ptr<seg::Segmenter> model)
-      : o_(o), c_(c), model_(std::move(model)), sk_(sk), explorer_(c.lanes.explorer),
+      : o_(o), c_(c), model_(std::move(model)), sk_(sk), explorer_(c.lanes.explorerOptions()),
         assembler_(sk, c.lanes.intersections, restrictions) {
     startDrive();
   }

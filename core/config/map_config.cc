@@ -21,6 +21,14 @@ MapConfig MapConfig::fromYaml(const YamlReader& r) {
   MapConfig m;
   r.read("osm", m.osm);
   m.skeleton = skeletonOptionsFromYaml(r.section("skeleton"));
+  if (const YamlReader f = r.section("road_frame"); f.present()) {
+    if (f.read("spacing_m", m.road_frame.spacing_m) && !(m.road_frame.spacing_m > 0.05 && m.road_frame.spacing_m <= 5.0)) {
+      f.fail("spacing_m", "must be in (0.05, 5]");
+    }
+    if (f.read("smoothing_m", m.road_frame.smoothing_m) && !(m.road_frame.smoothing_m >= 0.0 && std::isfinite(m.road_frame.smoothing_m))) {
+      f.fail("smoothing_m", "must be >= 0");
+    }
+  }
   if (const YamlReader origin = r.section("origin"); origin.present()) {
     geo::LatLonAlt o{origin.required<double>("lat"), origin.required<double>("lon"), origin.get<double>("alt", 0.0)};
     if (!(std::abs(o.lat) <= 90.0)) origin.fail("lat", "must be within [-90, 90]");

@@ -36,8 +36,10 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("drivable_min_count", o.drivable_min_count);
   r.read("min_observations", o.min_observations);
   r.read("corridor_half_width_m", o.corridor_half_width_m);
-  r.read("frame_spacing_m", o.frame_spacing_m);
-  r.read("frame_smoothing_m", o.frame_smoothing_m);
+  for (const char* moved : {"frame_spacing_m", "frame_smoothing_m"}) {
+    double unused = 0.0;
+    if (r.read(moved, unused)) r.fail(moved, "is the map block's now: road_frame {spacing_m, smoothing_m} in config/map.yaml");
+  }
   r.read("right_hand_traffic", o.right_hand_traffic);
   r.read("divider_search_m", o.divider_search_m);
   r.read("divider_bin_m", o.divider_bin_m);

@@ -41,8 +41,10 @@ struct ExplorerOptions {
 
   // --- the road's corridor in its Frenet frame (d > 0 left of the driving direction) ---
   double corridor_half_width_m = 15.0;
-  double frame_spacing_m = 0.5;          // Frenet frame samples along the skeleton polyline
-  double frame_smoothing_m = 6.0;        // moving-average radius of the skeleton polyline
+  // Frenet frame samples along the skeleton polyline and their moving-average radius: the map
+  // block's road_frame (config::RoadFrameConfig), set by LaneMapperSettings::explorerOptions.
+  double frame_spacing_m = 0.5;
+  double frame_smoothing_m = 6.0;
   bool right_hand_traffic = true;        // two-way road: our lanes are right of the divider
   double divider_search_m = 3.0;         // look for the direction divider within this of d = 0
   double divider_bin_m = 10.0;           // along s (also the bins of the carriageway search)

@@ -75,6 +75,9 @@ class BevBuilderApp {
     preview_max_px_ = max_px;
   }
   void setCheckpointPeriod(double period_s) { checkpoint_period_s_ = period_s; }
+  // The road frame a partial road's station is measured in (the map block's road_frame: the lane
+  // mapper explores up to the station in the same frame).
+  void setRoadFrame(const lanes::ExplorerOptions& frame) { road_frame_ = frame; }
 
   // Roads whose checkpoints are in the store (a crash or kill of an earlier run) are active again.
   void recover() {
@@ -292,7 +295,7 @@ class BevBuilderApp {
     const auto* road = skeleton_->road(open->road_id);
     if (!road) return;
     try {
-      const lanes::ExplorerOptions frame;  // the station in the explorer's frame of the road (its defaults)
+      const lanes::ExplorerOptions& frame = road_frame_;  // the station in the explorer's frame of the road
       const auto stored = bev::storePartialRoad(store_, *open, mapping::roadStation(*road, *last_position_, frame),
                                                 mapping::roadFrameLength(*road, frame));
       open->closed_utime = last_projected_utime_;
@@ -371,6 +374,7 @@ class BevBuilderApp {
   int64_t preview_road_ = -1;
   int preview_frames_ = 0;
   double checkpoint_period_s_ = 2.0;
+  lanes::ExplorerOptions road_frame_;  // only its frame_spacing_m / frame_smoothing_m are used
   std::chrono::steady_clock::time_point last_checkpoint_{};
   std::map<int64_t, int> checkpointed_;   // road -> frames in its checkpoint on disk
   int64_t last_projected_utime_ = 0;

@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
     BevBuilderApp app(process, std::move(sk), camera, options, store);
     app.setPreview(settings.preview_period_s, settings.preview_max_px);
     app.setCheckpointPeriod(settings.checkpoint_period_s);
+    app.setRoadFrame(withRoadFrame(lanes::ExplorerOptions{}, settings.map.road_frame));
     app.recover();
     app.subscribe(channel, settings);
     const int rc = process.spin();

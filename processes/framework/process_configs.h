@@ -67,14 +67,24 @@ struct BevBuilderSettings {
   static BevBuilderSettings fromYamlFile(const std::string& path);
 };
 
+// `o` in the map block's road frame (the explorer's frame, and the frame a partial road's station
+// is measured in: the BEV builder and the lane mapper use the same).
+inline lanes::ExplorerOptions withRoadFrame(lanes::ExplorerOptions o, const config::RoadFrameConfig& frame) {
+  o.frame_spacing_m = frame.spacing_m;
+  o.frame_smoothing_m = frame.smoothing_m;
+  return o;
+}
+
 // config/lane_mapper.yaml
 struct LaneMapperSettings {
   config::MapConfig map;
   intersections::IntersectionOptions intersections;
-  lanes::ExplorerOptions explorer;
+  lanes::ExplorerOptions explorer;  // the explorer block as read (its frame: explorerOptions())
   std::string store;
   std::string bev_channel = channels::kBevRoad;
   int queue_capacity = 100;
+  // The explorer block with the map block's road frame: what exploreRoad runs with.
+  lanes::ExplorerOptions explorerOptions() const { return withRoadFrame(explorer, map.road_frame); }
   static LaneMapperSettings fromYaml(const config::YamlReader& r);
   static LaneMapperSettings fromYamlFile(const std::string& path);
 };

@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
     const lanemap::osm::OsmData osm_data = lanemap::osm::readOsm(osm);
     auto sk = std::make_unique<lanemap::skeleton::Skeleton>(lanemap::skeleton::Skeleton::build(osm_data, settings.map.skeleton));
     std::cerr << "lane_mapper: " << sk->roads().size() << " atomic roads from " << osm << ", store " << store << "\n";
-    LaneMapperApp app(process, std::move(sk), settings.explorer, store, settings.bev_channel, settings.queue_capacity,
+    LaneMapperApp app(process, std::move(sk), settings.explorerOptions(), store, settings.bev_channel, settings.queue_capacity,
                       settings.intersections, osm_data.restrictions);
     app.setControls(lanemap::intersections::readControlNodes(osm));
     return process.spin();

@@ -189,6 +189,11 @@ TEST(Config, UnknownKeysAreErrorsNamingFileAndKey) {
   expectError([&] { ViewerSettings::fromYamlFile(f); }, f, "prot", "did you mean 'port'?");
   f = editedCopy(dir, "intersections.yaml", [](YAML::Node& n) { n["allow_uturns"] = true; });
   expectError([&] { intersectionsFromFile(f); }, f, "allow_uturns", "did you mean 'allow_u_turns'?");
+  // The explorer's frame keys moved to the map block: the error says where.
+  f = editedCopy(dir, "lane_mapper.yaml", [](YAML::Node& n) { n["explorer"]["frame_smoothing_m"] = 6.0; });
+  expectError([&] { LaneMapperSettings::fromYamlFile(f); }, f, "explorer.frame_smoothing_m", "road_frame {spacing_m, smoothing_m} in config/map.yaml");
+  f = editedCopy(dir, "map.yaml", [](YAML::Node& n) { n["road_frame"]["smoothing"] = 6.0; });
+  expectError([&] { config::MapConfig::fromYamlFile(f); }, f, "road_frame.smoothing", "did you mean 'smoothing_m'?");
   f = editedCopy(dir, "map.yaml", [](YAML::Node& n) { n["skeleton"]["junction_radius_m"] = 5.0; });
   expectError([&] { config::MapConfig::fromYamlFile(f); }, f, "skeleton.junction_radius_m", "unknown key");
   const std::string map = f;
@@ -226,6 +231,8 @@ TEST(Config, MistypedValuesAreErrorsNamingFileAndKey) {
   expectError([&] { intersectionsFromFile(f); }, f, "right_hand_traffic", "must be true or false");
   f = editedCopy(dir, "map.yaml", [](YAML::Node& n) { n["skeleton"]["junction_merge_radius_m"] = -3.0; });
   expectError([&] { config::MapConfig::fromYamlFile(f); }, f, "skeleton.junction_merge_radius_m", "must be > 0");
+  f = editedCopy(dir, "map.yaml", [](YAML::Node& n) { n["road_frame"]["spacing_m"] = 0.0; });
+  expectError([&] { config::MapConfig::fromYamlFile(f); }, f, "road_frame.spacing_m", "must be in (0.05, 5]");
   f = editedCopy(dir, "viewer.yaml", [](YAML::Node& n) { n["port"] = 70000; });
   expectError([&] { ViewerSettings::fromYamlFile(f); }, f, "port", "must be within [0, 65535]");
   f = editedCopy(dir, "vehicle.yaml", [](YAML::Node& n) { n["camera"]["width"] = "wide"; });
@@ -318,6 +325,8 @@ TEST(Config, LiveAndOfflineReadTheSameMapAndIntersections) {
     n["skeleton"]["roi_max_extent_m"] = 11.0;
     n["origin"]["lat"] = 37.8;
     n["origin"]["lon"] = -122.3;
+    n["road_frame"]["spacing_m"] = 0.8;
+    n["road_frame"]["smoothing_m"] = 3.0;
   });
   const std::string inter = editedCopy(dir, "intersections.yaml", [](YAML::Node& n) {
     n["straight_max_deg"] = 33.0;
@@ -346,6 +355,15 @@ TEST(Config, LiveAndOfflineReadTheSameMapAndIntersections) {
   expectSameSkeleton(viewer.map.skeleton, lanes.map.skeleton);
   expectSameIntersections(viewer.intersections, lanes.intersections);
   EXPECT_EQ(tracker.map.osm, lanes.map.osm);
+  // The road frame a partial road's station is measured in (BEV builder) is the one the explorer
+  // works in (lane mapper, lanemap-offline): the map block's.
+  EXPECT_EQ(bev.map.road_frame.spacing_m, 0.8);
+  EXPECT_EQ(bev.map.road_frame.smoothing_m, 3.0);
+  EXPECT_EQ(lanes.explorerOptions().frame_spacing_m, 0.8);
+  EXPECT_EQ(lanes.explorerOptions().frame_smoothing_m, 3.0);
+  const auto bev_frame = withRoadFrame(lanes::ExplorerOptions{}, bev.map.road_frame);
+  EXPECT_EQ(bev_frame.frame_spacing_m, lanes.explorerOptions().frame_spacing_m);
+  EXPECT_EQ(bev_frame.frame_smoothing_m, lanes.explorerOptions().frame_smoothing_m);
 
   // The shipped files: the lane mapper's intersections are config/intersections.yaml's (before,
   // the live lane mapper read a section lane_mapper.yaml did not have), and every process config

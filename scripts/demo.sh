@@ -31,7 +31,7 @@ echo "== the same with the simulator's truth labels (lanemap-offline --oracle), 
 "$bin/lanemap-offline" -q --oracle --log "$out/drive/drive.lcmlog" --osm "$out/drive/roads.osm" --out "$out/map-oracle"
 "$bin/lanemap-eval" --truth "$out/drive/groundtruth.osm" --map "$out/map-oracle/map.osm" --driven "$out/drive/scenario.json" --json "$out/map-oracle/eval.json"
 
-echo "== the live graph (oracle labels): lcm-logplayer at 1x -> segmenter --oracle -> road_tracker -> bev_builder"
+echo "== the live graph (oracle labels): lanemap-logplayer at 1x -> segmenter --oracle -> road_tracker -> bev_builder"
 echo "   -> lane_mapper over LCM, with lanemap-viewer (lanemap-launch config/launch/demo.yaml, inside a private"
 echo "   network namespace, so that no multicast reaches this host's network; about 70 s)."
 abs_out=$(cd "$out" && pwd)

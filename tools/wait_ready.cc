@@ -4,7 +4,7 @@
 // Launch files start a log player with it, so the first seconds of a drive are not lost to a
 // process still loading its map on a busy machine (config/launch/demo.yaml):
 //
-//   lanemap-wait-ready --timeout 60 segmenter road_tracker bev_builder && exec lcm-logplayer ...
+//   lanemap-wait-ready --timeout 60 segmenter road_tracker bev_builder && exec lanemap-logplayer ...
 #include "lanemap/status_t.hpp"
 #include "processes/framework/channels.h"
 

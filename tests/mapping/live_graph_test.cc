@@ -1,4 +1,4 @@
-// The live process graph (lanemap-launch config/launch/demo.yaml: lcm-logplayer at 1x ->
+// The live process graph (lanemap-launch config/launch/demo.yaml: lanemap-logplayer at 1x ->
 // segmenter (--oracle) -> road_tracker -> bev_builder -> lane_mapper over udpm, in a private
 // network namespace) maps a simulated drive like the offline runner does: the same roads and
 // lanes, centre lines within 0.15 m (the live bev_builder builds LIDAR meshes in a worker thread,

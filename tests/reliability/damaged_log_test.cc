@@ -1,15 +1,20 @@
 // A truncated or corrupt LCM log (issue 18, docs/robustness.md): LogReader
 // (processes/framework/log_reader.h) reads every whole event and counts what it could not read;
 // lanemap-offline maps what is readable and says so (stderr, summary.json "log_read"), and a file
-// with no whole event in it is a clear error (exit 2) that leaves no map behind.
+// with no whole event in it is a clear error (exit 2) that leaves no map behind. lanemap-logplayer
+// plays such a log onto the bus past the damage, at its pace (lcm-logplayer stops at it).
 #include "processes/framework/lcm_log_writer.h"
 #include "processes/framework/log_reader.h"
 #include "tests/bev/bev_replay.h"
+#include "tests/common/child_process.h"
+#include "tests/common/netns.h"
 #include "tests/common/sim_drive.h"
 
 #include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -104,6 +109,74 @@ TEST(LogReader, CountsTheEventsItReadAndTheBytesItCouldNot) {
   EXPECT_EQ(n.events, 0);
   EXPECT_EQ(n.unread, 50000);
   EXPECT_THROW(LogReader(dir.str("missing.lcmlog")), std::runtime_error);
+}
+
+// lanemap-logplayer over a private network namespace's bus: 40 events 20 ms apart, event 30's
+// timestamp 1000 s in the future (a damaged clock), event 10's sync word overwritten (events 9 and
+// 10 lost, as LogReader reads it). Every other event arrives, in order; the replay keeps the log's
+// pace (at least the 0.6 s the readable timestamps span before the jump) and does not wait out
+// the jump; stderr says the log is damaged. A file that is not a log: exit 2 and why.
+TEST(LogPlayer, PlaysEveryReadableEventOfADamagedLogAtItsPaceAndPassesOverABadTimestamp) {
+  if (!lt::inPrivateNetns()) {
+    ASSERT_EQ(lt::rerunInPrivateNetns(), 0);
+    return;
+  }
+  lt::TempDir dir("logplayer");
+  constexpr int kN = 40, kBytes = 100;
+  constexpr int64_t kOne = 4 + 8 + 8 + 4 + 4 + 1 + kBytes;
+  const std::string good = dir.str("good.lcmlog");
+  {
+    LcmLogWriter w(good);
+    for (int i = 0; i < kN; ++i) {
+      const std::vector<uint8_t> data(kBytes, static_cast<uint8_t>(i));
+      const int64_t t = i == 30 ? 1'000'000'000 : 20'000 * i;
+      w.write("X", 1'700'000'000'000'000 + t, data.data(), data.size());
+    }
+  }
+  std::string bytes = readBytes(good);
+  ASSERT_EQ(static_cast<int64_t>(bytes.size()), kN * kOne);
+  bytes[10 * kOne] = 0;
+  const std::string hit = dir.str("hit.lcmlog");
+  writeBytes(hit, bytes);
+
+  const std::string url = lt::testUdpmUrl(7671);
+  lcm::LCM lcm(url);
+  ASSERT_TRUE(lcm.good());
+  struct Got {
+    std::vector<int> ids;
+    void on(const lcm::ReceiveBuffer* b, const std::string&) { ids.push_back(b->data_size > 0 ? static_cast<const uint8_t*>(b->data)[0] : -1); }
+  } got;
+  lcm.subscribe("X", &Got::on, &got);
+  const auto play = [&](const std::string& log, const std::string& err) {
+    return lt::ChildProcess({"/bin/sh", "-c", "exec " + lt::binPath("lanemap-logplayer") + " -l '" + url + "' " + log + " 2> " + err});
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  lt::ChildProcess player = play(hit, dir.str("hit.err"));
+  ASSERT_TRUE(player.started());
+  int rc = -2;
+  while (rc == -2 && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60)) {
+    lcm.handleTimeout(10);
+    rc = player.waitExit(std::chrono::milliseconds(1));  // (0 would not look)
+  }
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (int i = 0; i < 20; ++i) lcm.handleTimeout(10);  // what is still in flight
+  EXPECT_EQ(rc, 0);
+  std::vector<int> want;
+  for (int i = 0; i < kN; ++i) {
+    if (i != 9 && i != 10) want.push_back(i);
+  }
+  EXPECT_EQ(got.ids, want);
+  EXPECT_GE(wall_s, 0.6) << "played faster than the log";
+  EXPECT_LT(wall_s, 30.0) << "waited for the bad timestamp";
+  const std::string err = readBytes(dir.str("hit.err"));
+  EXPECT_NE(err.find("is damaged, played what could be read: 38 events read"), std::string::npos) << err;
+  EXPECT_NE(err.find("2 timestamp jumps"), std::string::npos) << err;  // forward to event 30, back after it
+
+  // Not a log: exit 2, and why.
+  writeBytes(dir.str("noise.lcmlog"), std::string(5000, 'x'));
+  lt::ChildProcess noise = play(dir.str("noise.lcmlog"), dir.str("noise.err"));
+  EXPECT_EQ(noise.waitExit(std::chrono::seconds(30)), 2);
+  EXPECT_NE(readBytes(dir.str("noise.err")).find("not an LCM log, or no whole event in it"), std::string::npos);
 }
 
 TEST(DamagedLog, OfflineMapsWhatIsReadableSaysSoAndRefusesANonLog) {

@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # The live graph at real time (issue 6): simulates the demo drive (scripts/demo.sh: West Oakland,
 # 60 s, seed 1) or takes --drive DIR, runs config/launch/demo.yaml through lanemap-launch with
-# lcm-logplayer at 1x inside a private network namespace, once with the segmenter on the shipped
+# lanemap-logplayer at 1x inside a private network namespace, once with the segmenter on the shipped
 # model and once on the truth labels (--oracle), and prints what lanemap-graph-report reads from
 # the run's recording (STATUS, LANE_MAP, POSE): each process's CPU share (mean, max), latency
 # p50/p99, frame-to-BEV and camera-to-BEV latency, every drop counter and hand-over loss, and how
 # long after the drive's end the map was complete; plus the kernel's UDP receive-buffer overflows
 # in the namespace (a socket that could not keep up) and the CPU time of the whole launch
-# (lcm-logplayer and lcm-logger included, which report no STATUS). Figures only, no thresholds.
+# (lanemap-logplayer and lcm-logger included, which report no STATUS). Figures only, no thresholds.
 #
 #   tools/bench/live_graph.sh BUILD_DIR [--drive DIR] [--modes "model oracle"]
 # Takes about 75 s per mode, plus about 2 min to simulate the drive.
@@ -57,7 +57,7 @@ for mode in $modes; do
     oracle) args="--oracle" ;;
     *) echo "unknown mode $mode (model, oracle)" >&2; exit 2 ;;
   esac
-  echo "== live graph, segmenter on the $mode labels: lcm-logplayer at 1x, demo.yaml, private netns"
+  echo "== live graph, segmenter on the $mode labels: lanemap-logplayer at 1x, demo.yaml, private netns"
   store=$out/$mode
   mkdir -p "$store"
   TIMEFORMAT="   whole launch (all processes, player and recorder included): wall %R s, CPU user %U s + sys %S s"

@@ -43,7 +43,7 @@ echo "== segmenter: shipped model on 640x360 frames"
 
 # Issue 6: the live graph at 1x on the demo drive (60 s, seed 1), segmenter on the model and on the
 # truth labels: CPU share and latency per process, frame-to-BEV, drop counters, map completion.
-echo "== live graph at real time (lcm-logplayer 1x, demo.yaml, private netns): demo drive"
+echo "== live graph at real time (lanemap-logplayer 1x, demo.yaml, private netns): demo drive"
 tools/bench/live_graph.sh "$build"
 
 # Issue 20: the viewer's CPU while the demo drive plays at 1x (loaded the way the page loads it).

@@ -15,6 +15,7 @@
 #include "tests/common/netns.h"
 #include "tests/common/sim_drive.h"
 #include "tests/bev/bev_replay.h"
+#include "tests/common/status.h"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -44,12 +45,7 @@ struct Collector {
   }
 };
 
-int64_t counter(const status_t& s, const std::string& name) {
-  for (int i = 0; i < s.num_counters; ++i) {
-    if (s.counter_names[i] == name) return s.counter_values[i];
-  }
-  return -1;
-}
+using lanemap::testing::statusCounter;
 
 TEST(BevBuilderProcess, WritesAndAnnouncesTheRoadsTheCarDroveToTheirEnd) {
   // Made before entering the namespace (shared with the in-process test).
@@ -102,20 +98,20 @@ TEST(BevBuilderProcess, WritesAndAnnouncesTheRoadsTheCarDroveToTheirEnd) {
   }
   const auto done = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while (std::chrono::steady_clock::now() < done &&
-         (c.roads.size() < expected.size() || counter(c.last_status, "frames_received") < frames)) {
+         (c.roads.size() < expected.size() || statusCounter(c.last_status, "frames_received") < frames)) {
     lcm.handleTimeout(100);
   }
   EXPECT_GE(builder.stop(), 0);
   EXPECT_GE(tracker.stop(), 0);
 
   // UDP multicast may drop a datagram when the receiver is starved of CPU: tolerate 2 %, print it.
-  const int64_t received = counter(c.last_status, "frames_received");
+  const int64_t received = statusCounter(c.last_status, "frames_received");
   if (received != frames) std::printf("%lld of %d frames lost on the bus\n", static_cast<long long>(frames - received), frames);
   EXPECT_LE(received, frames);
   EXPECT_GE(received * 100, frames * 98LL);
-  EXPECT_GE(counter(c.last_status, "frames_projected"), received - 2) << "a frame may miss its pose at the very end";
-  EXPECT_GT(counter(c.last_status, "frames_mesh"), frames / 2);
-  EXPECT_EQ(counter(c.last_status, "frames_unknown_class"), 0);
+  EXPECT_GE(statusCounter(c.last_status, "frames_projected"), received - 2) << "a frame may miss its pose at the very end";
+  EXPECT_GT(statusCounter(c.last_status, "frames_mesh"), frames / 2);
+  EXPECT_EQ(statusCounter(c.last_status, "frames_unknown_class"), 0);
   std::set<int64_t> announced;
   for (const auto& m : c.roads) announced.insert(m.road_id);
   EXPECT_EQ(announced, expected);

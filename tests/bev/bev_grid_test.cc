@@ -1,4 +1,5 @@
 #include "core/bev/bev_grid.h"
+#include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -54,7 +55,8 @@ TEST(BevGrid, SavesAndLoadsExactly) {
   g.add({100, -3}, Layer::kStopLine, 2);
   g.addFrame();
   g.addFrame();
-  const std::string path = std::filesystem::temp_directory_path() / ("bev_" + std::to_string(getpid()) + ".bin");
+  const lanemap::testing::TempDir dir("bev-grid");
+  const std::string path = dir.str("grid.bin");
   g.save(path);
   const BevGrid h = BevGrid::load(path);
   EXPECT_DOUBLE_EQ(h.resolution(), 0.2);

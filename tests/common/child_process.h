@@ -7,6 +7,7 @@
 #include "lanemap/lidar_points_t.hpp"
 #include "lanemap/pose_t.hpp"
 #include "lanemap/status_t.hpp"
+#include "tests/common/status.h"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -87,11 +88,7 @@ class DriverMessages {
   // Counter of the last STATUS of `process` (-1 if absent).
   int64_t counter(const std::string& process, const std::string& name) const {
     auto it = last_status.find(process);
-    if (it == last_status.end()) return -1;
-    for (int i = 0; i < it->second.num_counters; ++i) {
-      if (it->second.counter_names[i] == name) return it->second.counter_values[i];
-    }
-    return -1;
+    return it == last_status.end() ? -1 : statusCounter(it->second, name);
   }
   // Handles messages until `done()` or the timeout; returns done().
   bool waitFor(const std::function<bool()>& done, std::chrono::milliseconds timeout) {

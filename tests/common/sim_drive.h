@@ -2,6 +2,8 @@
 // per test binary (shared by its tests) in a temporary folder.
 #pragma once
 
+#include "tests/common/temp_dir.h"
+
 #include <gtest/gtest.h>
 #include <sys/file.h>
 #include <sys/stat.h>
@@ -35,30 +37,6 @@ inline CommandResult runCommand(const std::string& cmd) {
 
 inline std::string binPath(const std::string& name) { return std::string(LANEMAP_BIN_DIR) + "/" + name; }
 inline std::string dataPath(const std::string& rel) { return std::string(LANEMAP_DATA_DIR) + "/" + rel; }
-
-// A fresh temporary folder removed at destruction.
-class TempDir {
- public:
-  explicit TempDir(const std::string& tag) {
-    path_ = std::filesystem::temp_directory_path() /
-            ("lanemap-" + tag + "-" + std::to_string(getpid()) + "-" + std::to_string(counter()++));
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  const std::filesystem::path& path() const { return path_; }
-  std::string str(const std::string& rel = "") const { return rel.empty() ? path_.string() : (path_ / rel).string(); }
-
- private:
-  static int& counter() {
-    static int c = 0;
-    return c;
-  }
-  std::filesystem::path path_;
-};
 
 // A simulated drive made once and shared by every test process that asks for the same one
 // (ctest runs each test case in its own process). Kept under build/test-data/, keyed by the

@@ -1,7 +1,7 @@
 // The whole mapping graph across four machines, over LCM udpm with ttl=1: inside the test's private
 // network namespace, four namespaces with their own hostnames on one bridge (tests/common/netns_lan.h)
 // run config/launch/replay.yaml with one lanemap-launch each: "sensors" plays a simulated drive
-// (camera, truth labels, LIDAR, poses) with lcm-logplayer at 1x, standing in for the drivers;
+// (camera, truth labels, LIDAR, poses) with lanemap-logplayer at 1x, standing in for the drivers;
 // "perception" runs lanemap-segmenter --oracle (the truth labels: the model drops frames under
 // load); "mapping" runs lanemap-road-tracker, lanemap-bev-builder and lanemap-lane-mapper with the
 // map store; "viewer" records every channel with lcm-logger. The same file then runs on one machine
@@ -34,6 +34,7 @@
 #include "tests/common/netns.h"
 #include "tests/common/netns_lan.h"
 #include "tests/common/sim_drive.h"
+#include "tests/common/status.h"
 
 #include <gtest/gtest.h>
 
@@ -99,10 +100,7 @@ std::map<std::string, std::set<std::string>> statusHosts(const std::vector<LogMe
 int64_t lastCounter(const std::vector<LogMessage>& log, const std::string& process, const std::string& name) {
   int64_t value = -1;
   for (const auto& s : decodeAll<lanemap::status_t>(log, channels::kStatus)) {
-    if (s.process != process) continue;
-    for (int i = 0; i < s.num_counters; ++i) {
-      if (s.counter_names[i] == name) value = s.counter_values[i];
-    }
+    if (s.process == process) value = lanemap::testing::statusCounter(s, name, value);
   }
   return value;
 }
@@ -149,7 +147,7 @@ GraphRun runGraph(const NetnsLan& lan, const Roles& roles, const std::string& dr
   ChildProcess sensors(launcher(lan, roles.sensors, "sensors", {"drive=" + drive, "speed=1"}));
   const int rc = sensors.waitExit(90s);
   if (rc != 0) {
-    out.error = "the sensors launcher (lcm-logplayer) ended with " + std::to_string(rc);
+    out.error = "the sensors launcher (lanemap-logplayer) ended with " + std::to_string(rc);
     return out;
   }
   // Every pose recorded, then every road the car closed mapped (its LANE_MAP is sent after the

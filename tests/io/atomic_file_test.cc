@@ -2,6 +2,7 @@
 // opened the old file keeps reading the old content (the file is replaced, not rewritten in
 // place), no temporary file is left behind, failures name the path.
 #include "core/io/atomic_file.h"
+#include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
 
@@ -13,17 +14,12 @@
 namespace lanemap::io {
 namespace {
 
-std::filesystem::path tempDir() {
-  return std::filesystem::temp_directory_path() / ("lanemap_io_atomic_test_" + std::to_string(::getpid()));
+// The file's scratch folder (tests/common/temp_dir.h), made on first use and removed at exit.
+const lanemap::testing::TempDir& scratch() {
+  static const lanemap::testing::TempDir dir("io-atomic");
+  return dir;
 }
-class ScratchCleanup : public ::testing::Environment {
- public:
-  void TearDown() override {
-    std::error_code ec;
-    std::filesystem::remove_all(tempDir(), ec);
-  }
-};
-const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+std::filesystem::path tempDir() { return scratch().path(); }
 
 std::string readAll(std::istream& in) {
   std::stringstream s;

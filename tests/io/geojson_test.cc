@@ -1,6 +1,7 @@
 // Tests of the GeoJSON export (core/io/geojson.h): valid JSON with the expected features,
 // properties and WGS84 positions, written atomically, clear error for a bad path.
 #include "core/io/geojson.h"
+#include "tests/common/temp_dir.h"
 
 #include "core/geo/local_frame.h"
 
@@ -18,17 +19,12 @@ using map::LaneMap;
 using map::LineType;
 using nlohmann::json;
 
-std::filesystem::path tempDir() {
-  return std::filesystem::temp_directory_path() / ("lanemap_io_geojson_test_" + std::to_string(::getpid()));
+// The file's scratch folder (tests/common/temp_dir.h), made on first use and removed at exit.
+const lanemap::testing::TempDir& scratch() {
+  static const lanemap::testing::TempDir dir("io-geojson");
+  return dir;
 }
-class ScratchCleanup : public ::testing::Environment {
- public:
-  void TearDown() override {
-    std::error_code ec;
-    std::filesystem::remove_all(tempDir(), ec);
-  }
-};
-const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+std::filesystem::path tempDir() { return scratch().path(); }
 
 map::LineString line(int64_t id, LineType type, std::vector<Eigen::Vector3d> pts) {
   map::LineString l;

@@ -2,6 +2,7 @@
 // round trip, the file follows Lanelet2's rules, foreign maps (JOSM ids, reversed bounds, the
 // Lanelet2 project's Karlsruhe example) read correctly, bad input throws with the path.
 #include "core/io/lanelet2.h"
+#include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
 
@@ -31,24 +32,12 @@ using map::TurnDirection;
 
 const std::string kKarlsruhe = std::string(LANEMAP_DATA_DIR) + "/lanelet2/karlsruhe_mapping_example.osm";
 
-std::filesystem::path tempDir() {
-  return std::filesystem::temp_directory_path() / ("lanemap_io_lanelet2_test_" + std::to_string(::getpid()));
+// The file's scratch folder (tests/common/temp_dir.h), made on first use and removed at exit.
+const lanemap::testing::TempDir& scratch() {
+  static const lanemap::testing::TempDir dir("io-lanelet2");
+  return dir;
 }
-
-std::string tempPath(const std::string& name) {
-  std::filesystem::create_directories(tempDir());
-  return (tempDir() / name).string();
-}
-
-// Removes the test's scratch folder when the tests are done.
-class ScratchCleanup : public ::testing::Environment {
- public:
-  void TearDown() override {
-    std::error_code ec;
-    std::filesystem::remove_all(tempDir(), ec);
-  }
-};
-const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+std::string tempPath(const std::string& name) { return scratch().str(name); }
 
 void writeText(const std::string& path, const std::string& text) {
   std::ofstream(path) << text;

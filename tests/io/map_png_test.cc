@@ -2,6 +2,7 @@
 // intersection lanes, stop line, background), the scale and size options hold, the footer has
 // the scale bar and attribution, the PNG file decodes.
 #include "core/io/map_png.h"
+#include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
 
@@ -20,17 +21,12 @@ using map::LaneMap;
 using map::LineType;
 namespace colours = map_png_colours;
 
-std::filesystem::path tempDir() {
-  return std::filesystem::temp_directory_path() / ("lanemap_io_map_png_test_" + std::to_string(::getpid()));
+// The file's scratch folder (tests/common/temp_dir.h), made on first use and removed at exit.
+const lanemap::testing::TempDir& scratch() {
+  static const lanemap::testing::TempDir dir("io-map-png");
+  return dir;
 }
-class ScratchCleanup : public ::testing::Environment {
- public:
-  void TearDown() override {
-    std::error_code ec;
-    std::filesystem::remove_all(tempDir(), ec);
-  }
-};
-const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+std::filesystem::path tempDir() { return scratch().path(); }
 
 map::LineString line(int64_t id, LineType type, std::vector<Eigen::Vector3d> pts) {
   map::LineString l;

@@ -2,6 +2,7 @@
 // on request), ways, nodes, restrictions and bounds survive, and libosmium / `osmium fileinfo`
 // read the file back.
 #include "core/io/road_osm_writer.h"
+#include "tests/common/temp_dir.h"
 #include "core/intersections/regulatory.h"
 
 #include <gtest/gtest.h>
@@ -22,21 +23,12 @@
 namespace lanemap::io {
 namespace {
 
-std::filesystem::path tempDir() {
-  return std::filesystem::temp_directory_path() / ("lanemap_io_road_osm_test_" + std::to_string(::getpid()));
+// The file's scratch folder (tests/common/temp_dir.h), made on first use and removed at exit.
+const lanemap::testing::TempDir& scratch() {
+  static const lanemap::testing::TempDir dir("io-road-osm");
+  return dir;
 }
-std::string tempPath(const std::string& name) {
-  std::filesystem::create_directories(tempDir());
-  return (tempDir() / name).string();
-}
-class ScratchCleanup : public ::testing::Environment {
- public:
-  void TearDown() override {
-    std::error_code ec;
-    std::filesystem::remove_all(tempDir(), ec);
-  }
-};
-const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+std::string tempPath(const std::string& name) { return scratch().str(name); }
 
 // Everything libosmium reads from a file.
 struct Loaded : osmium::handler::Handler {

@@ -173,7 +173,7 @@ void expectClean(const std::string& map, size_t max_curvature) {
   const size_t curvature = curvatureWarnings(c.validate_output);
   EXPECT_EQ(lastLine(c.validate_output), std::to_string(curvature) + " issues found.") << map << ":\n" << c.validate_output;
   EXPECT_LE(curvature, max_curvature) << c.validate_output;
-  if (curvature == 0) EXPECT_EQ(c.validate_rc, 0) << c.validate_output;
+  if (curvature == 0) { EXPECT_EQ(c.validate_rc, 0) << c.validate_output; }
   ASSERT_TRUE(c.route.is_object()) << c.route_output;
   EXPECT_EQ(c.route_rc, 0) << c.route_output;
   EXPECT_EQ(c.route["load_errors"].get<int>(), 0) << c.route_output;

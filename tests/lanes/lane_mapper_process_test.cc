@@ -15,6 +15,7 @@
 #include "tests/common/netns.h"
 #include "tests/common/sim_drive.h"
 #include "tests/lanes/synthetic_bev.h"
+#include "tests/common/status.h"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -40,12 +41,7 @@ struct Collector {
   }
 };
 
-int64_t counter(const status_t& s, const std::string& name) {
-  for (int i = 0; i < s.num_counters; ++i) {
-    if (s.counter_names[i] == name) return s.counter_values[i];
-  }
-  return -1;
-}
+using lanemap::testing::statusCounter;
 
 // The longest nearly straight two-way road (its polyline within 0.3 m of the chord).
 const skeleton::AtomicRoad* straightRoad(const skeleton::Skeleton& sk) {
@@ -123,9 +119,9 @@ TEST(LaneMapperProcess, MapsARoadStoresItAndReloadsAfterRestart) {
     msg.resolution_m = 0.1;
     lcm.publish("BEV_ROAD", &msg);
     ASSERT_TRUE(waitFor(lcm, [&] { return !c.maps.empty(); }, 30)) << "no LANE_MAP";
-    ASSERT_TRUE(waitFor(lcm, [&] { return counter(c.status.back(), "roads_mapped") == 1; }, 5));
-    EXPECT_EQ(counter(c.status.back(), "roads_failed"), 1);
-    EXPECT_EQ(counter(c.status.back(), "bev_roads_received"), 2);
+    ASSERT_TRUE(waitFor(lcm, [&] { return statusCounter(c.status.back(), "roads_mapped") == 1; }, 5));
+    EXPECT_EQ(statusCounter(c.status.back(), "roads_failed"), 1);
+    EXPECT_EQ(statusCounter(c.status.back(), "bev_roads_received"), 2);
     EXPECT_GE(proc.stop(), 0);
   }
   ASSERT_EQ(c.maps.size(), 1u);
@@ -160,7 +156,7 @@ TEST(LaneMapperProcess, MapsARoadStoresItAndReloadsAfterRestart) {
     lanemap::testing::ChildProcess proc({kBinary, "--config", kConfig, "--osm", kOsm, "--store", store, "--lcm-url", url});
     ASSERT_TRUE(proc.started());
     // (a late STATUS of the first run may still arrive: wait for one of this run)
-    EXPECT_TRUE(waitFor(lcm, [&] { return !c.maps.empty() && !c.status.empty() && counter(c.status.back(), "roads_loaded") == 1; }, 20));
+    EXPECT_TRUE(waitFor(lcm, [&] { return !c.maps.empty() && !c.status.empty() && statusCounter(c.status.back(), "roads_loaded") == 1; }, 20));
     EXPECT_GE(proc.stop(), 0);
   }
   ASSERT_EQ(c.maps.size(), 1u);
@@ -218,13 +214,13 @@ TEST(LaneMapperProcess, MapsAPartialRoadAsFarAsDrivenThenComplete) {
   ASSERT_TRUE(proc.started());
   // On start it finds the partial road without lanes and maps it (catch-up); a BEV_ROAD as the
   // BEV builder sends it maps it again.
-  ASSERT_TRUE(waitFor(lcm, [&] { return !c.status.empty() && counter(c.status.back(), "roads_partial") >= 1; }, 30))
+  ASSERT_TRUE(waitFor(lcm, [&] { return !c.status.empty() && statusCounter(c.status.back(), "roads_partial") >= 1; }, 30))
       << "the partial road was not mapped";
   bev_road_t msg{};
   msg.road_id = road->id;
   msg.path = stored.path;
   lcm.publish("BEV_ROAD", &msg);
-  ASSERT_TRUE(waitFor(lcm, [&] { return counter(c.status.back(), "roads_partial") >= 2; }, 30));
+  ASSERT_TRUE(waitFor(lcm, [&] { return statusCounter(c.status.back(), "roads_partial") >= 2; }, 30));
   {
     const auto m = io::readLanelet2(road_file, o.lat, o.lon);
     ASSERT_EQ(m.lanelets.size(), 2u);
@@ -242,9 +238,9 @@ TEST(LaneMapperProcess, MapsAPartialRoadAsFarAsDrivenThenComplete) {
   const auto complete = bev::storeRoad(store, pass);
   ASSERT_TRUE(complete.completed_partial);
   msg.path = complete.path;
-  const int64_t mapped_before = counter(c.status.back(), "roads_mapped");
+  const int64_t mapped_before = statusCounter(c.status.back(), "roads_mapped");
   lcm.publish("BEV_ROAD", &msg);
-  ASSERT_TRUE(waitFor(lcm, [&] { return counter(c.status.back(), "roads_mapped") > mapped_before; }, 30));
+  ASSERT_TRUE(waitFor(lcm, [&] { return statusCounter(c.status.back(), "roads_mapped") > mapped_before; }, 30));
   EXPECT_GE(proc.stop(), 0);
   const auto m = io::readLanelet2(road_file, o.lat, o.lon);
   ASSERT_EQ(m.lanelets.size(), 2u);

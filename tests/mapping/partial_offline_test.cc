@@ -135,7 +135,7 @@ TEST(PartialOffline, TheRoadALogEndsOnIsMappedAsFarAsDrivenThenCompletedByALater
   EXPECT_GT(furthest, car_station - 4.0);
   // The closed roads are complete.
   for (const auto& e : summary["roads"]) {
-    if (e["road_id"] != road_id) EXPECT_FALSE(e.contains("partial")) << e.dump();
+    if (e["road_id"] != road_id) { EXPECT_FALSE(e.contains("partial")) << e.dump(); }
   }
 
   // lanemap-eval --driven: the partial road is scored against its truth as far as driven (cut where

@@ -25,6 +25,7 @@
 #include "tests/common/lcm_log.h"
 #include "tests/common/netns.h"
 #include "tests/common/sim_drive.h"
+#include "tests/common/status.h"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -87,14 +88,12 @@ struct Watch {
   int64_t frames_missed = 0;  // the BEV builder's: frames lost on the bus (a gap in their seq)
   void onStatus(const lcm::ReceiveBuffer*, const std::string&, const lanemap::status_t* s) {
     if (s->process == "bev_builder") {
-      for (size_t i = 0; i < s->counter_names.size() && i < s->counter_values.size(); ++i) {
-        if (s->counter_names[i] == "frames_missed") frames_missed = std::max<int64_t>(frames_missed, s->counter_values[i]);
-      }
+      frames_missed = std::max<int64_t>(frames_missed, lt::statusCounter(*s, "frames_missed", 0));
     }
     if (s->process != process) return;
     bev_pid = s->pid;
     bev_pids.insert(s->pid);
-    for (size_t i = 0; i < s->counter_names.size() && i < s->counter_values.size(); ++i) bev_counters[s->counter_names[i]] = s->counter_values[i];
+    for (const auto& [name, value] : lt::statusCounters(*s)) bev_counters[name] = value;
   }
 };
 

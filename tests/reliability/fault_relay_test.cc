@@ -5,6 +5,7 @@
 #include "lanemap/status_t.hpp"
 #include "tests/common/child_process.h"
 #include "tests/common/netns.h"
+#include "tests/common/status.h"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -50,9 +51,7 @@ struct Out {
 // A counter of the relay's STATUS; per-channel counters (dropped:A ...) exist from their first
 // event, so a missing one is 0.
 int64_t counter(const lanemap::status_t& s, const std::string& name) {
-  for (int i = 0; i < s.num_counters; ++i)
-    if (s.counter_names[i] == name) return s.counter_values[i];
-  return name.find(':') != std::string::npos ? 0 : -1;
+  return lanemap::testing::statusCounter(s, name, name.find(':') != std::string::npos ? 0 : -1);
 }
 
 struct RelayRun {

@@ -14,6 +14,7 @@
 #include "lanemap/lidar_packets_t.hpp"
 #include "lanemap/lidar_points_t.hpp"
 #include "lanemap/status_t.hpp"
+#include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -239,8 +240,8 @@ TEST(HostileOsm, ACorruptPbfLeavesNoOpenDescriptor) {
   std::ifstream in(std::string(LANEMAP_DATA_DIR) + "/osm/monaco.osm.pbf", std::ios::binary);
   std::vector<char> pbf((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_GT(pbf.size(), 5000u);
-  const std::string path = (std::filesystem::temp_directory_path() /
-                            ("lanemap-hostile-" + std::to_string(getpid()) + ".osm.pbf")).string();
+  const lanemap::testing::TempDir dir("hostile-pbf");
+  const std::string path = dir.str("cut.osm.pbf");
   const size_t before = openDescriptors();
   for (int i = 0; i < 50; ++i) {
     std::vector<char> bad(pbf.begin(), pbf.begin() + 3000 + 37 * i);  // cut inside a blob
@@ -249,7 +250,6 @@ TEST(HostileOsm, ACorruptPbfLeavesNoOpenDescriptor) {
     EXPECT_THROW(osm::readOsm(path), osm::OsmError) << i;
   }
   EXPECT_EQ(openDescriptors(), before);
-  std::filesystem::remove(path);
   // A good file still reads (and leaves nothing open either).
   EXPECT_FALSE(osm::readOsm(std::string(LANEMAP_DATA_DIR) + "/osm/monaco.osm.pbf").ways.empty());
   EXPECT_EQ(openDescriptors(), before);

@@ -19,6 +19,7 @@
 #include "tests/common/child_process.h"
 #include "tests/common/netns.h"
 #include "tests/common/sim_drive.h"
+#include "tests/common/status.h"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -47,7 +48,7 @@ struct Statuses {
   std::map<std::string, int> pid;
   void onStatus(const lcm::ReceiveBuffer*, const std::string&, const lanemap::status_t* s) {
     auto& c = counters[s->process];
-    for (size_t i = 0; i < s->counter_names.size() && i < s->counter_values.size(); ++i) c[s->counter_names[i]] = s->counter_values[i];
+    for (const auto& [name, value] : lanemap::testing::statusCounters(*s)) c[name] = value;
     if (pid.count(s->process) && pid[s->process] != s->pid) restarted.insert(s->process);
     pid[s->process] = s->pid;
   }
@@ -170,8 +171,8 @@ TEST(LossyBus, TenAndThirtyPercentLostAreCountedAndTheDrivenRoadIsStillMapped) {
     const int64_t missed = r.st.get("bev_builder", "frames_missed");
     EXPECT_LE(missed, labels_dropped);
     EXPECT_GE(missed, labels_dropped - 4) << "frames_missed " << missed << ", the relay dropped " << labels_dropped;
-    if (drop == 0.0) EXPECT_EQ(missed, 0);
-    if (drop > 0.2) EXPECT_GE(r.st.get("bev_builder", "frames_missed_pct"), 15);
+    if (drop == 0.0) { EXPECT_EQ(missed, 0); }
+    if (drop > 0.2) { EXPECT_GE(r.st.get("bev_builder", "frames_missed_pct"), 15); }
     EXPECT_GE(r.st.get("lane_mapper", "roads_mapped"), 1) << "the graph maps what it can";
     // The live relay drops what its log mode drops of the same log with the same seed (one random
     // stream per channel): a lossy live run can be replayed offline, deterministically

@@ -361,7 +361,7 @@ TEST(PowerLoss, EveryStepIsOnDiskBeforeTheNextStarts) {
         break;
       }
       case io::WriteStep::kFolderSynced:
-        if (!pending_folder.empty()) EXPECT_EQ(fs::path(path), fs::path(pending_folder));
+        if (!pending_folder.empty()) { EXPECT_EQ(fs::path(path), fs::path(pending_folder)); }
         pending_folder.clear();
         ++folder_syncs;
         break;

@@ -16,6 +16,7 @@
 //   all 27 with a node as via; r3410831 = only_straight_on, from w92627431 via n273244852 to
 //   w254596488.
 #include "core/osm/osm_data.h"
+#include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
 #include <osmium/io/any_input.hpp>
@@ -36,28 +37,7 @@ namespace {
 
 const std::string kDataDir = LANEMAP_DATA_DIR;
 
-class TempDir {
- public:
-  TempDir() {
-    path_ = fs::temp_directory_path() /
-            ("lanemap_osm_test_" + std::to_string(::getpid()) + "_" +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string write(const std::string& name, const std::string& text) const {
-    const std::string p = (path_ / name).string();
-    std::ofstream(p) << text;
-    return p;
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
+using lanemap::testing::TempDir;
 
 std::string osmXml(const std::string& body) {
   return "<?xml version='1.0' encoding='UTF-8'?>\n<osm version=\"0.6\" generator=\"test\">\n" + body +
@@ -128,8 +108,8 @@ TEST(ReadOsm, MonacoPbfCountsMatchOsmium) {
 }
 
 TEST(ReadOsm, XmlAndPbfGiveTheSameData) {
-  TempDir dir;
-  const std::string pbf = dir.file("west-oakland.osm.pbf");
+  TempDir dir("osm-reader");
+  const std::string pbf = dir.str("west-oakland.osm.pbf");
   {  // Convert with libosmium's writer (what `osmium cat -o x.pbf` does).
     osmium::io::Reader reader{kDataDir + "/osm/west-oakland.osm"};
     osmium::io::Header header = reader.header();
@@ -155,7 +135,7 @@ TEST(ReadOsm, XmlAndPbfGiveTheSameData) {
 }
 
 TEST(ReadOsm, KeepsOnlyDrivableWaysAndTheirNodes) {
-  TempDir dir;
+  TempDir dir("osm-reader");
   std::string body;
   for (int i = 1; i <= 9; ++i) {
     body += "<node id=\"" + std::to_string(i) + "\" lat=\"43.7" + std::to_string(i) +
@@ -199,33 +179,33 @@ TEST(ReadOsm, KeepsOnlyDrivableWaysAndTheirNodes) {
 }
 
 TEST(ReadOsm, MissingFileThrowsWithPath) {
-  TempDir dir;
-  expectOsmError(dir.file("nope.osm"), {"not found", "nope.osm"});
+  TempDir dir("osm-reader");
+  expectOsmError(dir.str("nope.osm"), {"not found", "nope.osm"});
 }
 
 TEST(ReadOsm, EmptyFileThrowsWithPath) {
-  TempDir dir;
+  TempDir dir("osm-reader");
   expectOsmError(dir.write("empty.osm", ""), {"empty", "empty.osm"});
 }
 
 TEST(ReadOsm, MalformedXmlThrowsWithPath) {
-  TempDir dir;
+  TempDir dir("osm-reader");
   expectOsmError(dir.write("broken.osm", "<?xml version='1.0'?>\n<osm version=\"0.6\"><node id=\"1\" lat="),
                  {"broken.osm"});
 }
 
 TEST(ReadOsm, GarbagePbfThrowsWithPath) {
-  TempDir dir;
+  TempDir dir("osm-reader");
   expectOsmError(dir.write("garbage.osm.pbf", std::string(3000, '\x7f')), {"garbage.osm.pbf"});
 }
 
 TEST(ReadOsm, UnknownFormatThrowsWithPath) {
-  TempDir dir;
+  TempDir dir("osm-reader");
   expectOsmError(dir.write("map.txt", "hello"), {"map.txt"});
 }
 
 TEST(ReadOsm, NoDrivableWayThrows) {
-  TempDir dir;
+  TempDir dir("osm-reader");
   const std::string body =
       "<node id=\"1\" lat=\"43.7\" lon=\"7.4\"/><node id=\"2\" lat=\"43.71\" lon=\"7.41\"/>\n"
       "<way id=\"5\"><nd ref=\"1\"/><nd ref=\"2\"/><tag k=\"highway\" v=\"footway\"/></way>\n";

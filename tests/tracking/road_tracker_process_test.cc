@@ -6,6 +6,7 @@
 #include "lanemap/road_event_t.hpp"
 #include "tests/common/netns.h"
 #include "tests/common/child_process.h"
+#include "tests/common/status.h"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -34,12 +35,7 @@ struct Collector {
   }
 };
 
-int64_t counter(const lanemap::status_t& s, const std::string& name) {
-  for (int i = 0; i < s.num_counters; ++i) {
-    if (s.counter_names[i] == name) return s.counter_values[i];
-  }
-  return -1;
-}
+using lanemap::testing::statusCounter;
 
 // A route through west-oakland: from the middle of the longest two-way road on to its successors,
 // straight on where possible.
@@ -130,7 +126,7 @@ TEST(RoadTrackerProcess, PublishesTheEventsOfTheCoreTracker) {
   // Drain until a STATUS shows every pose received.
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(5);
   while (std::chrono::steady_clock::now() < end &&
-         (c.status.empty() || counter(c.status.back(), "poses_received") < sent)) {
+         (c.status.empty() || statusCounter(c.status.back(), "poses_received") < sent)) {
     lcm.handleTimeout(100);
   }
   // Stopped by SIGTERM it exits by itself (not killed). Today Process::spin returns 1 ("LCM handle
@@ -138,8 +134,8 @@ TEST(RoadTrackerProcess, PublishesTheEventsOfTheCoreTracker) {
   EXPECT_GE(proc.stop(), 0);
 
   ASSERT_FALSE(c.status.empty());
-  EXPECT_EQ(counter(c.status.back(), "poses_received"), sent);
-  EXPECT_EQ(counter(c.status.back(), "poses_invalid"), 0);
+  EXPECT_EQ(statusCounter(c.status.back(), "poses_received"), sent);
+  EXPECT_EQ(statusCounter(c.status.back(), "poses_invalid"), 0);
   // The true route: entered r0, then reached / entered for each next road.
   ASSERT_EQ(expected.size(), 2 * ids.size() - 1);
   ASSERT_EQ(c.events.size(), expected.size());
@@ -155,7 +151,7 @@ TEST(RoadTrackerProcess, PublishesTheEventsOfTheCoreTracker) {
       EXPECT_EQ(e.intersection_id, sk.road(e.road_id)->to);
     }
   }
-  EXPECT_EQ(counter(c.status.back(), "events_entered_road"), static_cast<int64_t>(ids.size()));
+  EXPECT_EQ(statusCounter(c.status.back(), "events_entered_road"), static_cast<int64_t>(ids.size()));
 }
 
 TEST(RoadTrackerProcess, MissingOsmFileIsAClearError) {

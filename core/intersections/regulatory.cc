@@ -1,4 +1,5 @@
 #include "core/intersections/regulatory.h"
+#include "core/osm/coordinate_guard.h"
 
 #include <osmium/handler.hpp>
 #include <osmium/io/any_input.hpp>
@@ -64,6 +65,9 @@ std::unordered_map<int64_t, ControlNode> readControlNodes(const std::string& osm
   std::error_code ec;
   if (!std::filesystem::is_regular_file(osm_path, ec)) {
     throw osm::OsmError("cannot read OSM file '" + osm_path + "': no such file");
+  }
+  if (const std::string bad = osm::exponentCoordinate(osm_path); !bad.empty()) {  // libosmium overflows on it
+    throw osm::OsmError("cannot read OSM file '" + osm_path + "': a coordinate in exponent notation, " + bad);
   }
   ControlHandler h;
   try {

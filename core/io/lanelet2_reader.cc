@@ -3,6 +3,7 @@
 #include "core/geo/polyline.h"
 #include "core/io/lanelet2.h"
 #include "core/io/lanelet2_internal.h"
+#include "core/osm/coordinate_guard.h"
 
 #include <nlohmann/json.hpp>
 #include <osmium/handler.hpp>
@@ -152,6 +153,9 @@ RawOsm parseOsmFile(const std::string& path) {
   }
   if (std::filesystem::file_size(path, ec) == 0) {
     throw Lanelet2Error("cannot read Lanelet2 map '" + path + "': empty file");
+  }
+  if (const std::string bad = osm::exponentCoordinate(path); !bad.empty()) {  // libosmium overflows on it
+    throw Lanelet2Error("cannot read Lanelet2 map '" + path + "': a coordinate in exponent notation, " + bad);
   }
   RawOsm raw;
   try {

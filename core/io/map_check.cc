@@ -4,6 +4,7 @@
 #include "core/geo/local_frame.h"
 #include "core/io/atomic_file.h"
 #include "core/io/lanelet2.h"
+#include "core/osm/coordinate_guard.h"
 
 #include <nlohmann/json.hpp>
 #include <osmium/handler.hpp>
@@ -123,6 +124,9 @@ Polyline samples(const Polyline& pl, double step) {
 std::vector<CheckResult> checkLanelet2Map(const std::string& path, const MapCheckOptions& options) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw IoError("cannot read map '" + path + "': no such file");
+  if (const std::string bad = osm::exponentCoordinate(path); !bad.empty()) {  // libosmium overflows on it
+    throw IoError("cannot read map '" + path + "': a coordinate in exponent notation, " + bad);
+  }
   Osm osm;
   try {
     osmium::io::Reader reader{osmium::io::File{path, "osm"}};

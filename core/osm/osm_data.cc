@@ -15,6 +15,8 @@
 //   skeleton cannot use them yet). The value comes from `restriction`, else `restriction:motorcar`.
 #include "core/osm/osm_data.h"
 
+#include "core/osm/coordinate_guard.h"
+
 #include <osmium/handler.hpp>
 #include <osmium/io/any_input.hpp>
 #include <osmium/visitor.hpp>
@@ -199,6 +201,9 @@ OsmData readOsm(const std::string& path) {
   if (fs::is_directory(path, ec)) throw OsmError("OSM path is a directory, not a file: '" + path + "'");
   if (fs::file_size(path, ec) == 0) throw OsmError("OSM file is empty: '" + path + "'");
 
+  if (const std::string bad = exponentCoordinate(path); !bad.empty()) {  // libosmium overflows on it
+    throw OsmError("cannot read OSM file '" + path + "': a coordinate in exponent notation, " + bad);
+  }
   OsmData data;
   WayHandler ways;
   osmium::Box header_box;

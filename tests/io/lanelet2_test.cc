@@ -551,6 +551,12 @@ TEST(Lanelet2, BadFilesThrowWithThePath) {
   writeText(truncated, "<?xml version='1.0'?>\n<osm version='0.6'>\n  <node id='1' lat='49.0' lon='8.4'>\n  <way");
   expectThrowNaming(truncated, "");
 
+  // A coordinate with a huge exponent (the lanelet2 fuzz harness's find: libosmium's parser
+  // overflows on it) is refused before libosmium reads it, naming the attribute.
+  const std::string exponent = tempPath("exponent.osm");
+  writeText(exponent, "<?xml version='1.0'?>\n<osm version='0.6'>\n  <node id='1' lat = '49.00295E11383' lon='8.4'/>\n</osm>\n");
+  expectThrowNaming(exponent, "exponent notation, lat=\"49.00295E11383\"");
+
   const std::string not_xml = tempPath("not_xml.osm");
   writeText(not_xml, "this is not an OSM file\n");
   expectThrowNaming(not_xml, "");

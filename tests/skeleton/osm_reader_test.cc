@@ -204,6 +204,19 @@ TEST(ReadOsm, UnknownFormatThrowsWithPath) {
   expectOsmError(dir.write("map.txt", "hello"), {"map.txt"});
 }
 
+// A coordinate in exponent notation is refused before libosmium parses it (its parser overflows
+// a signed integer on a large exponent); "e" elsewhere (a tag's value, another attribute) is not.
+TEST(ReadOsm, ACoordinateInExponentNotationIsRefusedBeforeLibosmiumReadsIt) {
+  TempDir dir("osm-reader");
+  const std::string road =
+      "<way id=\"5\"><nd ref=\"1\"/><nd ref=\"2\"/><tag k=\"highway\" v=\"residential\"/>"
+      "<tag k=\"note\" v=\"lat='1e5' here\"/></way>\n";
+  const std::string good = "<node id=\"1\" lat=\"43.7\" lon=\"7.4\" user=\"lee\"/><node id=\"2\" lat=\"43.71\" lon=\"7.41\"/>\n";
+  EXPECT_EQ(readOsm(dir.write("plain.osm", osmXml(good + road))).ways.size(), 1u);
+  const std::string bad = "<node id=\"1\" lat=\"43.7\" lon=\"7.4e99999\"/><node id=\"2\" lat=\"43.71\" lon=\"7.41\"/>\n";
+  expectOsmError(dir.write("exponent.osm", osmXml(bad + road)), {"exponent notation", "lon=\"7.4e99999\"", "exponent.osm"});
+}
+
 TEST(ReadOsm, NoDrivableWayThrows) {
   TempDir dir("osm-reader");
   const std::string body =

@@ -22,7 +22,14 @@ map::LineString line(int64_t id, map::LineType type, std::vector<Eigen::Vector3d
   return l;
 }
 
-TEST(LaneMapMessage, ALaneMapGoesOverTheBusAndBack) {
+// West Oakland's skeleton, built once for the file's tests (fromMessage takes a road's nodes from it).
+const skeleton::Skeleton& westOakland() {
+  static const skeleton::Skeleton sk = skeleton::Skeleton::build(osm::readOsm(std::string(LANEMAP_DATA_DIR) + "/osm/west-oakland.osm"));
+  return sk;
+}
+
+// Two lanes of a 50 m road between a curb, a dashed line and a double solid line.
+map::LaneMap twoLanes() {
   map::LaneMap m;
   m.origin_lat = 37.8;
   m.origin_lon = -122.3;
@@ -45,6 +52,11 @@ TEST(LaneMapMessage, ALaneMapGoesOverTheBusAndBack) {
   b.index_from_left = 0;
   b.successors = {};
   m.lanelets = {a, b};
+  return m;
+}
+
+TEST(LaneMapMessage, ALaneMapGoesOverTheBusAndBack) {
+  const map::LaneMap m = twoLanes();
 
   const lane_map_t msg = toMessage(7, m, 123456, "/store/lane_map.osm");
   EXPECT_EQ(msg.id, 7);
@@ -55,7 +67,7 @@ TEST(LaneMapMessage, ALaneMapGoesOverTheBusAndBack) {
   EXPECT_EQ(msg.lanes[0].right_boundary.type, +polyline_t::TYPE_CURB);
   EXPECT_EQ(msg.lanes[1].left_boundary.type, +polyline_t::TYPE_SOLID);  // the message has no double solid
 
-  const auto sk = skeleton::Skeleton::build(osm::readOsm(std::string(LANEMAP_DATA_DIR) + "/osm/west-oakland.osm"));
+  const skeleton::Skeleton& sk = westOakland();
   const auto* road = sk.road(7);
   ASSERT_NE(road, nullptr);
   const map::LaneMap back = fromMessage(msg, sk);
@@ -97,23 +109,10 @@ TEST(LaneMapMessage, ALaneMapGoesOverTheBusAndBack) {
 
 // The lane mapper's per-lane confidence and a road mapped as far as driven reach the viewer.
 TEST(LaneMapMessage, ConfidenceAndPartialRoadGoOverTheBus) {
-  map::LaneMap m;
-  m.lines = {line(1, map::LineType::kCurb, {{0, 0, 0}, {30, 0, 0}}), line(2, map::LineType::kDashed, {{0, 3.5, 0}, {30, 3.5, 0}}),
-             line(3, map::LineType::kSolid, {{0, 7, 0}, {30, 7, 0}})};
-  map::Lanelet a;
-  a.id = 800001;
-  a.right_id = 1;
-  a.left_id = 2;
-  a.centre = {{0, 1.75, 0}, {30, 1.75, 0}};
-  a.confidence = 0.86;
-  a.partial = map::PartialRoad{31.5, 120.0};
-  map::Lanelet b = a;
-  b.id = 800002;
-  b.right_id = 2;
-  b.left_id = 3;
-  b.centre = {{0, 5.25, 0}, {30, 5.25, 0}};
-  b.confidence = 0.33;
-  m.lanelets = {a, b};
+  map::LaneMap m = twoLanes();
+  m.lanelets[0].confidence = 0.86;
+  m.lanelets[1].confidence = 0.33;
+  for (auto& ll : m.lanelets) ll.partial = map::PartialRoad{31.5, 120.0};
 
   const lane_map_t msg = toMessage(7, m, 1, "");
   EXPECT_DOUBLE_EQ(msg.partial_station_m, 31.5);
@@ -124,7 +123,7 @@ TEST(LaneMapMessage, ConfidenceAndPartialRoadGoOverTheBus) {
   lane_map_t got;
   ASSERT_EQ(got.decode(wire.data(), 0, static_cast<int>(wire.size())), static_cast<int>(wire.size()));
 
-  const auto sk = skeleton::Skeleton::build(osm::readOsm(std::string(LANEMAP_DATA_DIR) + "/osm/west-oakland.osm"));
+  const skeleton::Skeleton& sk = westOakland();
   const map::LaneMap back = fromMessage(got, sk);
   ASSERT_EQ(back.lanelets.size(), 2u);
   ASSERT_TRUE(back.lanelets[0].confidence && back.lanelets[1].confidence);

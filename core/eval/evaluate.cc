@@ -45,9 +45,7 @@ EvalReport evaluate(const map::LaneMap& truth_map, const map::LaneMap& built_map
 geo::LatLonAlt lanelet2Origin(const std::string& path) {
   // lanemap's files: the writer's origin, from the map's sidecar (core/io/lanelet2.h).
   if (const auto o = io::lanelet2WriterOrigin(path)) return {o->lat, o->lon, 0.0};
-  if (const std::string bad = osm::exponentCoordinate(path); !bad.empty()) {  // libosmium overflows on it
-    throw io::Lanelet2Error("cannot read Lanelet2 map '" + path + "': a coordinate in exponent notation, " + bad);
-  }
+  osm::refuseExponentCoordinate<io::Lanelet2Error>(path, "cannot read Lanelet2 map '" + path + "'");  // libosmium overflows on it
   osmium::io::Reader reader(path, osmium::osm_entity_bits::node);
   while (osmium::memory::Buffer buffer = reader.read()) {
     for (const auto& node : buffer.select<osmium::Node>()) {

@@ -66,9 +66,7 @@ std::unordered_map<int64_t, ControlNode> readControlNodes(const std::string& osm
   if (!std::filesystem::is_regular_file(osm_path, ec)) {
     throw osm::OsmError("cannot read OSM file '" + osm_path + "': no such file");
   }
-  if (const std::string bad = osm::exponentCoordinate(osm_path); !bad.empty()) {  // libosmium overflows on it
-    throw osm::OsmError("cannot read OSM file '" + osm_path + "': a coordinate in exponent notation, " + bad);
-  }
+  osm::refuseExponentCoordinate<osm::OsmError>(osm_path, "cannot read OSM file '" + osm_path + "'");  // libosmium overflows on it
   ControlHandler h;
   try {
     osmium::io::Reader reader{osmium::io::File{osm_path}, osmium::osm_entity_bits::node};

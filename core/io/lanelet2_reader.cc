@@ -154,9 +154,7 @@ RawOsm parseOsmFile(const std::string& path) {
   if (std::filesystem::file_size(path, ec) == 0) {
     throw Lanelet2Error("cannot read Lanelet2 map '" + path + "': empty file");
   }
-  if (const std::string bad = osm::exponentCoordinate(path); !bad.empty()) {  // libosmium overflows on it
-    throw Lanelet2Error("cannot read Lanelet2 map '" + path + "': a coordinate in exponent notation, " + bad);
-  }
+  osm::refuseExponentCoordinate<Lanelet2Error>(path, "cannot read Lanelet2 map '" + path + "'");  // libosmium overflows on it
   RawOsm raw;
   try {
     osmium::io::Reader reader{osmium::io::File{path, "osm"}};

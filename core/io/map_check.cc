@@ -124,9 +124,7 @@ Polyline samples(const Polyline& pl, double step) {
 std::vector<CheckResult> checkLanelet2Map(const std::string& path, const MapCheckOptions& options) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw IoError("cannot read map '" + path + "': no such file");
-  if (const std::string bad = osm::exponentCoordinate(path); !bad.empty()) {  // libosmium overflows on it
-    throw IoError("cannot read map '" + path + "': a coordinate in exponent notation, " + bad);
-  }
+  osm::refuseExponentCoordinate<IoError>(path, "cannot read map '" + path + "'");  // libosmium overflows on it
   Osm osm;
   try {
     osmium::io::Reader reader{osmium::io::File{path, "osm"}};

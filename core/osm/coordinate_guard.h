@@ -15,4 +15,13 @@ namespace lanemap::osm {
 // with '<' (compressed or PBF: not scanned). Reads the file once, as a stream.
 std::string exponentCoordinate(const std::string& path);
 
+// Throws Error(prefix + ": a coordinate in exponent notation, lat="..."") when the file has one
+// (every reader in front of libosmium calls this with its own error type and message prefix).
+template <class Error>
+void refuseExponentCoordinate(const std::string& path, const std::string& prefix) {
+  if (const std::string bad = exponentCoordinate(path); !bad.empty()) {
+    throw Error(prefix + ": a coordinate in exponent notation, " + bad);
+  }
+}
+
 }  // namespace lanemap::osm

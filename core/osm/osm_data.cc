@@ -201,9 +201,7 @@ OsmData readOsm(const std::string& path) {
   if (fs::is_directory(path, ec)) throw OsmError("OSM path is a directory, not a file: '" + path + "'");
   if (fs::file_size(path, ec) == 0) throw OsmError("OSM file is empty: '" + path + "'");
 
-  if (const std::string bad = exponentCoordinate(path); !bad.empty()) {  // libosmium overflows on it
-    throw OsmError("cannot read OSM file '" + path + "': a coordinate in exponent notation, " + bad);
-  }
+  refuseExponentCoordinate<OsmError>(path, "cannot read OSM file '" + path + "'");  // libosmium overflows on it
   OsmData data;
   WayHandler ways;
   osmium::Box header_box;

@@ -18,9 +18,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// Cell classes of the straightened raster; >= kBlocked kills a particle.
-enum Code : uint8_t { kUnobserved = 0, kDrivable, kBlocked, kSeparation, kDashed, kSolid, kCurb, kOutside };
-
 int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
 // Direct tile access to a BevGrid (one hash lookup per tile change, not per layer and cell).
@@ -212,18 +209,27 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
       if (!t) continue;
       const double obs = layer(t, idx, bev::Layer::kObserved);
       if (obs < o.min_observations) continue;
-      auto f = [&](bev::Layer l) { return layer(t, idx, l) / obs; };
+      // A line: seen so in marking_fraction of the cell's observations, and at least
+      // kill_min_count times.
+      auto line = [&](bev::Layer l, double fraction) {
+        const double n = layer(t, idx, l);
+        return n >= o.kill_min_count && n / obs >= fraction;
+      };
+      const double passable = layer(t, idx, bev::Layer::kDrivable) + layer(t, idx, bev::Layer::kCrosswalk) +
+                              layer(t, idx, bev::Layer::kStopLine);
       uint8_t c;
-      if (f(bev::Layer::kCurb) >= o.marking_fraction) c = kCurb;
-      else if (f(bev::Layer::kSolidLine) >= o.marking_fraction) c = kSolid;
-      else if (f(bev::Layer::kDashedLine) >= o.marking_fraction) c = kDashed;
-      else if (f(bev::Layer::kLaneSeparation) >= o.separation_fraction) c = kSeparation;
-      else if (f(bev::Layer::kDrivable) + f(bev::Layer::kCrosswalk) + f(bev::Layer::kStopLine) >= o.drivable_fraction) c = kDrivable;
+      if (line(bev::Layer::kCurb, o.marking_fraction)) c = kCurb;
+      else if (line(bev::Layer::kSolidLine, o.marking_fraction)) c = kSolid;
+      else if (line(bev::Layer::kDashedLine, o.marking_fraction)) c = kDashed;
+      else if (line(bev::Layer::kLaneSeparation, o.separation_fraction)) c = kSeparation;
+      else if (passable / obs >= o.drivable_fraction) c = kDrivable;
       // Seen drivable often enough, whatever else it was labelled: the lane classes are relative to
       // the ego lane, and frames taken inside a junction (no ego lane) label the roads around it
       // background; on a short road after a turn most views are such frames.
       else if (o.drivable_min_count > 0 && layer(t, idx, bev::Layer::kDrivable) >= o.drivable_min_count) c = kDrivable;
-      else c = kBlocked;
+      // Blocked on at least kill_min_count observations of something else; fewer say nothing.
+      else if (obs - passable >= o.kill_min_count) c = kBlocked;
+      else continue;
       r.code[static_cast<size_t>(i) * r.nd + j] = c;
     }
   }
@@ -371,6 +377,20 @@ struct Track {
 };
 
 }  // namespace
+
+const char* toString(RasterClass c) {
+  switch (c) {
+    case kUnobserved: return "unobserved";
+    case kDrivable: return "drivable";
+    case kBlocked: return "blocked";
+    case kSeparation: return "separation";
+    case kDashed: return "dashed";
+    case kSolid: return "solid";
+    case kCurb: return "curb";
+    case kOutside: return "outside";
+  }
+  return "?";
+}
 
 RoadGeometry RoadGeometry::fromSkeleton(const skeleton::AtomicRoad& road) {
   RoadGeometry g;
@@ -901,6 +921,7 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
   const Raster R = buildRaster(grid, *frame, road, o);
   for (uint8_t c : R.code) ++res.stats.raster_cells[c];
   res.stats.raster_s = since(t0);
+  if (history_stride > 0) res.raster = {R.sa, R.d0, R.res, R.ns, R.nd, R.code};
 
   // 2-3. The particle filter, DBSCAN and lane tracks.
   t0 = Clock::now();

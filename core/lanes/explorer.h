@@ -6,10 +6,12 @@
 // 1. The road's BEV evidence is resampled into a straightened raster in the road's Frenet frame
 //    (s along the skeleton, d to the left), each cell classified once: unobserved, drivable,
 //    blocked (observed, not drivable), lane separation, dashed, solid, curb, or outside our
-//    direction (beyond the divider of a two-way road). A cell seen drivable drivable_min_count
-//    times is drivable (frames taken in a junction label the roads around it background); a
-//    blocked strip a lane wide between painted lines (one dashed, or drivable somewhere along the
-//    bin, or holding a one-way road's line, or beside a two-way road's divider; a kerb at a slant
+//    direction (beyond the divider of a two-way road). A line or a blocked cell needs
+//    kill_min_count observations saying so (a far cell is seen 2-4 times, and one stray label
+//    among them is noise, not a boundary): with fewer, the cell is what its other observations
+//    say (drivable, else unobserved). A cell seen drivable drivable_min_count times is drivable
+//    (frames taken in a junction label the roads around it background); a blocked strip a lane
+//    wide between painted lines (one dashed, or drivable somewhere along the bin, or holding a one-way road's line, or beside a two-way road's divider; a kerb at a slant
 //    to the frame counts within line_tolerance_m) is a lane the segmentation does not name (beyond its +-2 lane classes, or seen from the junction
 //    before the road: the lane classes are the ego lane's cross-section's only). Only the
 //    explored stretch kills a particle (past the ROI edges lie the junctions). A road whose stretch between its ROIs is shorter than
@@ -107,9 +109,20 @@ struct ExplorationResult {
   ExplorationStats stats;
   // Lanes present at arc length s.
   int laneCountAt(double s) const;
-  // Optional debug data: surviving particles (s, d) of every `history_stride`-th step.
+  // Optional debug data (history_stride > 0): surviving particles (s, d) of every
+  // `history_stride`-th step, and the straightened raster the particles ran on.
   std::vector<Eigen::Vector2d> history;
+  struct DebugRaster {
+    double s0 = 0.0, d0 = 0.0, resolution = 0.0;  // cell (i, j) covers s0 + i res.., d0 + j res..
+    int rows = 0, cols = 0;                       // rows along s, columns along d (right to left)
+    std::vector<uint8_t> code;                    // rows x cols, RasterClass values
+  } raster;
 };
+
+// Classes of the straightened raster's cells (ExplorationResult::raster); >= kBlocked kills a
+// particle's footprint.
+enum RasterClass : uint8_t { kUnobserved = 0, kDrivable, kBlocked, kSeparation, kDashed, kSolid, kCurb, kOutside };
+const char* toString(RasterClass c);
 
 // The stretch [s_begin, s_end] of a road that exploreRoad explores (the road's own, between its
 // two ROIs, clamped to the polyline's length; on a road shorter there than

@@ -32,6 +32,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("seed", o.seed);
   r.read("marking_fraction", o.marking_fraction);
   r.read("separation_fraction", o.separation_fraction);
+  r.read("kill_min_count", o.kill_min_count);
   r.read("drivable_fraction", o.drivable_fraction);
   r.read("drivable_min_count", o.drivable_min_count);
   r.read("min_observations", o.min_observations);
@@ -87,6 +88,7 @@ void ExplorerOptions::validate() const {
   need(max_heading_rad > 0 && max_heading_rad < 1.6, "max_heading_rad in (0, 1.6)");
   need(marking_fraction > 0 && marking_fraction <= 1, "marking_fraction in (0, 1]");
   need(separation_fraction > 0 && separation_fraction <= 1, "separation_fraction in (0, 1]");
+  need(kill_min_count >= 1, "kill_min_count >= 1");
   need(drivable_fraction >= 0 && drivable_fraction <= 1, "drivable_fraction in [0, 1]");
   need(drivable_min_count >= 0, "drivable_min_count >= 0");
   need(min_observations >= 1, "min_observations >= 1");

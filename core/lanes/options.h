@@ -34,6 +34,9 @@ struct ExplorerOptions {
   // cells (fewer than min_observations) are passable but never give a lane a start (see births).
   double marking_fraction = 0.3;
   double separation_fraction = 0.3;
+  int kill_min_count = 2;                // a line or a blocked cell needs at least this many
+                                         //   observations saying so: one hit among a far cell's
+                                         //   three or four is noise (fewer: unobserved)
   double drivable_fraction = 0.5;
   int drivable_min_count = 1;            // ... unless seen drivable this often (0: off): a junction's
                                          //   frames label the roads around it background

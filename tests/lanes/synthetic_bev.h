@@ -75,12 +75,19 @@ struct Speckles {  // cells labelled dashed line at random (a far line smeared b
   double share;     // of the cells
 };
 
+struct FarGround {  // drivable ground seen far off: 2-4 observations per cell, some of them noise
+  double s0, s1, d0, d1;
+  double dashed_share;      // of the cells: one of the observations labelled dashed line
+  double seen_once_share;   // of the cells: a single observation, background (nothing labelled)
+};
+
 struct Layout {
   Reference ref;
   std::vector<Line> lines;
   std::vector<Area> areas;
   std::vector<Box> boxes;
   std::vector<Speckles> speckles;
+  std::vector<FarGround> far;  // painted instead of everything else where it lies
   double observed_half_width = 14.0;
   double observed_s0 = -1e9;  // nothing observed before this s (a road first seen this far in)
   double drivable_share = 1.0;  // of a drivable cell's observations, the share labelled drivable
@@ -107,6 +114,22 @@ inline bev::BevGrid paint(const Layout& L) {
       const Eigen::Vector2d sd = L.ref.toSD(g.cellCentre(cell));
       const double s = sd.x(), d = sd.y();
       if (s < 0 || s > L.ref.length || s < L.observed_s0 || std::abs(d) > L.observed_half_width) continue;
+      const FarGround* far = nullptr;
+      for (const FarGround& f : L.far) {
+        if (s >= f.s0 && s <= f.s1 && d >= f.d0 && d <= f.d1) far = &f;
+      }
+      if (far) {
+        if (U(rng) < far->seen_once_share) {
+          g.add(cell, bev::Layer::kObserved, 1);
+          continue;
+        }
+        const int n = 2 + static_cast<int>(U(rng) * 3);
+        const bool dash = U(rng) < far->dashed_share;
+        g.add(cell, bev::Layer::kObserved, n);
+        g.add(cell, bev::Layer::kDrivable, n - dash);
+        if (dash) g.add(cell, bev::Layer::kDashedLine, 1);
+        continue;
+      }
       const int obs = obsN(rng);
       g.add(cell, bev::Layer::kObserved, obs);
       bool blocked = false;

@@ -36,7 +36,8 @@ struct ExplorerOptions {
   double separation_fraction = 0.3;
   int kill_min_count = 2;                // a line or a blocked cell needs at least this many
                                          //   observations saying so: one hit among a far cell's
-                                         //   three or four is noise (fewer: unobserved)
+                                         //   three or four is noise (fewer: the cell is what its
+                                         //   other observations say, drivable or unobserved)
   double drivable_fraction = 0.5;
   int drivable_min_count = 1;            // ... unless seen drivable this often (0: off): a junction's
                                          //   frames label the roads around it background

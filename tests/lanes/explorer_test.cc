@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdio>
 #include <set>
 
@@ -475,6 +476,31 @@ TEST(Explorer, LaneOnGroundSeenFarOffIsFound) {
   const Report rep = run(sc);
   expectLanes(rep, sc, 0.2);
   for (const Lane& l : rep.result.lanes) EXPECT_GT(l.s_end - l.s_begin, 180.0) << "lane " << l.id;
+  // The raster kept for lanemap-explore --raster (history_stride > 0) is the one counted in the
+  // stats, and its far lane is drivable but for the noise.
+  const bev::BevGrid grid = paint(sc.layout);
+  RoadGeometry road;
+  road.polyline = sc.layout.ref.polyline();
+  road.s_begin = 3.0;
+  road.s_end = sc.layout.ref.length - 3.0;
+  const ExplorationResult dbg = exploreRoad(grid, road, {}, std::nullopt, 5);
+  ASSERT_EQ(dbg.raster.code.size(), static_cast<size_t>(dbg.raster.rows) * dbg.raster.cols);
+  std::array<int64_t, 8> counts{};
+  int64_t far = 0, far_drivable = 0;
+  for (int i = 0; i < dbg.raster.rows; ++i) {
+    for (int j = 0; j < dbg.raster.cols; ++j) {
+      const uint8_t c = dbg.raster.code[static_cast<size_t>(i) * dbg.raster.cols + j];
+      ++counts[c];
+      const double d = dbg.raster.d0 + (j + 0.5) * dbg.raster.resolution;
+      if (d > 2.2 && d < 4.8) {
+        ++far;
+        far_drivable += c == kDrivable;
+      }
+    }
+  }
+  EXPECT_EQ(counts, dbg.stats.raster_cells);
+  EXPECT_GT(far_drivable, 0.95 * far);
+  EXPECT_FALSE(dbg.history.empty());
   ExplorerOptions one;
   one.kill_min_count = 1;
   const Report old = run(sc, 1, one);

@@ -798,15 +798,25 @@ std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const Ro
   // A piece beside a lane (it splits off it, merges into it, or both with the same one) holding
   // fewer particles per metre than bulge_density_fraction of that lane's is a stretch where a few
   // particles found room (noise the lines left), not a lane (a bus bay or a turn pocket holds its
-  // share): dropped, the others renumbered.
+  // share). A lane of its own, over half of whose stretch another lane holds more than
+  // 1 / weak_density_fraction times its particles per metre, is a few particles that found room
+  // beyond a kerb or between stray labels. Both are dropped, the others renumbered.
   auto density = [](const Lane& l) { return l.particle_samples / std::max(1.0, l.s_end - l.s_begin); };
+  std::vector<bool> drop(lanes.size(), false);
+  for (const auto& lane : lanes) {
+    const int beside = lane.split_from >= 0 ? lane.split_from : lane.merges_into;
+    drop[lane.id] = beside >= 0 && (lane.split_from < 0 || lane.merges_into < 0 || lane.split_from == lane.merges_into) &&
+                    density(lane) < o.bulge_density_fraction * density(lanes[beside]);
+    for (const auto& other : lanes) {
+      const double overlap = std::min(lane.s_end, other.s_end) - std::max(lane.s_begin, other.s_begin);
+      drop[lane.id] = drop[lane.id] || (other.id != lane.id && overlap >= 0.5 * (lane.s_end - lane.s_begin) &&
+                                        density(lane) < o.weak_density_fraction * density(other));
+    }
+  }
   std::vector<int> new_id(lanes.size(), -1);
   std::vector<Lane> kept;
   for (auto& lane : lanes) {
-    const int beside = lane.split_from >= 0 ? lane.split_from : lane.merges_into;
-    const bool bulge = beside >= 0 && (lane.split_from < 0 || lane.merges_into < 0 || lane.split_from == lane.merges_into) &&
-                       density(lane) < o.bulge_density_fraction * density(lanes[beside]);
-    if (bulge) continue;
+    if (drop[lane.id]) continue;
     new_id[lane.id] = static_cast<int>(kept.size());
     kept.push_back(std::move(lane));
   }

@@ -29,7 +29,8 @@
 //    lane that loses its particles for less than lane_gap_max_m (parked car) continues; lanes
 //    inside one wide cluster (a stretch with no markings) coast with their last offsets.
 //    A piece beside a lane (splitting off it, merging into it) with a fraction of its particles is
-//    dropped.
+//    dropped, and so is any lane holding under weak_density_fraction of the particles per metre
+//    of a lane over half its stretch (a few particles that found room beyond a kerb).
 // 4. Each lane's particle history is regressed (Eq. 6: piecewise linear with optimised break
 //    points, then a natural cubic spline) as d(s); way-points every waypoint_spacing_m.
 // 5. Boundaries: from each way-point, probe left and right along the normal until a marking, curb,

@@ -62,6 +62,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("short_road_min_m", o.short_road_min_m);
   r.read("split_neighbour_m", o.split_neighbour_m);
   r.read("bulge_density_fraction", o.bulge_density_fraction);
+  r.read("weak_density_fraction", o.weak_density_fraction);
   r.read("bin_m", o.bin_m);
   r.read("break_spacing_m", o.break_spacing_m);
   r.read("break_penalty_m2", o.break_penalty_m2);
@@ -102,7 +103,7 @@ void ExplorerOptions::validate() const {
   need(birth_every_m > 0 && birth_min_free_m >= 0 && birth_particles >= 1, "births");
   need(birth_min_evidence >= 0 && birth_min_evidence <= 1, "birth_min_evidence in [0, 1]");
   need(dbscan_eps_m > 0 && dbscan_min_points >= 1, "dbscan");
-  need(track_tolerance_m >= 0 && lane_gap_max_m >= 0 && same_lane_m >= 0 && min_lane_length_m >= 0 && bulge_density_fraction >= 0, "tracking");
+  need(track_tolerance_m >= 0 && lane_gap_max_m >= 0 && same_lane_m >= 0 && min_lane_length_m >= 0 && bulge_density_fraction >= 0 && weak_density_fraction >= 0, "tracking");
   need(short_road_min_m >= 1.0 && short_road_min_m <= 100.0, "short_road_min_m in [1, 100]");
   need(bin_m > 0 && break_spacing_m >= bin_m && break_penalty_m2 >= 0, "regression");
   need(waypoint_spacing_m > 0, "waypoint_spacing_m > 0");

@@ -84,6 +84,9 @@ struct ExplorerOptions {
   double bulge_density_fraction = 0.15;  // a lane that splits off or merges into a lane with fewer
                                          //   particles per metre than this fraction of that lane's
                                          //   is noise beside it, not a lane
+  double weak_density_fraction = 0.05;   // any lane with fewer particles per metre than this
+                                         //   fraction of a lane over most of its stretch is
+                                         //   dropped (0: never)
 
   // --- centre line regression (Eq. 6) and way-points ---
   double bin_m = 1.0;                    // particle positions are binned along s (exact for Eq. 6)

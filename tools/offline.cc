@@ -306,7 +306,9 @@ class OfflineMapper {
     if (partial) entry["partial"] = {{"station_m", partial->station_m}, {"road_length_m", partial->road_length_m}};
     try {
       const auto geometry = partial ? mapping::drivenStretch(*r, partial->station_m, explorer_) : lanes::RoadGeometry::fromSkeleton(*r);
-      auto [res, lanes_of_road] = mapping::exploreRoadLanes(grid, geometry, partial, explorer_, sk_.frame().origin());
+      auto [res, lanes_of_road, dropped] = mapping::exploreRoadLanes(grid, geometry, partial, explorer_, sk_.frame().origin());
+      for (const auto& why : dropped) std::fprintf(stderr, "\rlanemap-offline: road %lld: lanelet left out, %s\n", static_cast<long long>(road_id), why.c_str());
+      if (!dropped.empty()) entry["lanes_dropped"] = dropped;
       crosswalks_[road_id] = lanes::findCrosswalks(grid, lanes_of_road, 1);
       assembler_.setRoad(road_id, std::move(lanes_of_road));
       ++roads_mapped_;

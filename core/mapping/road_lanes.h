@@ -11,13 +11,25 @@
 #include "core/map/lane_map.h"
 
 #include <optional>
+#include <string>
+#include <vector>
 
 namespace lanemap::mapping {
 
 struct RoadLanes {
   lanes::ExplorationResult result;
   map::LaneMap lanes;
+  // The lanelets left out of `lanes` because Lanelet2's loader would misread them (their bounds
+  // against each other or the left bound on the right: io::orientationProblem), one line each
+  // naming the lanelet. The rest of the road is mapped: one bad lane costs that lane, not the map
+  // (writeLanelet2 refuses a map holding one).
+  std::vector<std::string> lanes_dropped;
 };
+
+// Removes from `lanes` every lanelet io::orientationProblem finds, with what referred to it: its
+// bounds and stop line when no other lanelet uses them, successor links, regulatory elements' and
+// crosswalks' references. Returns the problems, one per lanelet removed, in map order.
+std::vector<std::string> dropMisreadLanelets(map::LaneMap& lanes);
 
 // Throws what lanes::exploreRoad throws.
 RoadLanes exploreRoadLanes(const bev::BevGrid& grid, const lanes::RoadGeometry& geometry,

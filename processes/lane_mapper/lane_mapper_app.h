@@ -9,7 +9,9 @@
 // says how far it was driven: bev_store.h partialRoad) is explored as far as it was driven and its
 // lanelets are tagged partial (core/mapping/partial_road.h; STATUS roads_partial); one driven too
 // little to map is counted (partial_roads_too_short). A later BEV_ROAD of the road's own grid (a
-// drive closed it, its partial evidence merged in) maps it again, complete.
+// drive closed it, its partial evidence merged in) maps it again, complete. A lanelet Lanelet2
+// would misread (its bounds against its driving direction) is left out of the road's lanes and
+// said (STATUS lanelets_dropped; core/mapping/road_lanes.h): the rest of the road is mapped.
 //
 // STATUS latency (per road): from the BEV_ROAD message's receive time (lcm::ReceiveBuffer::recv_utime)
 // to its LANE_MAP published: the wait behind other roads, loading the grid, lane exploration and
@@ -134,7 +136,9 @@ class LaneMapperApp {
     }
     const std::optional<map::PartialRoad> driven_to =
         partial ? std::optional<map::PartialRoad>(map::PartialRoad{partial->station_m, partial->road_length_m}) : std::nullopt;
-    auto [res, m] = mapping::exploreRoadLanes(grid, geometry, driven_to, options_, sk_->frame().origin());
+    auto [res, m, dropped] = mapping::exploreRoadLanes(grid, geometry, driven_to, options_, sk_->frame().origin());
+    for (const auto& why : dropped) std::cerr << "lane_mapper: road " << job.road_id << ": lanelet left out, " << why << "\n";
+    process_.counters().add("lanelets_dropped", static_cast<int64_t>(dropped.size()));
     if (partial) process_.counters().add("roads_partial");
     int64_t next_id = 1;
     for (const auto& l : m.lines) next_id = std::max(next_id, l.id + 1);

@@ -106,13 +106,17 @@ class BevBuilderApp {
     }
   }
 
-  void subscribe(const std::string& semantic_channel, const BevBuilderSettings& s) {
-    const int q_pose = s.pose_queue, q_sem = s.semantic_queue, q_lidar = s.lidar_queue, q_event = s.road_event_queue;
-    auto& lcm = process_.lcm();
-    lcm.subscribe(channels::kPose, &BevBuilderApp::onPose, this)->setQueueCapacity(q_pose);
-    lcm.subscribe(semantic_channel, &BevBuilderApp::onLabels, this)->setQueueCapacity(q_sem);
-    lcm.subscribe(channels::kLidarPackets, &BevBuilderApp::onLidar, this)->setQueueCapacity(q_lidar);
-    lcm.subscribe(channels::kRoadEvent, &BevBuilderApp::onRoadEvent, this)->setQueueCapacity(q_event);
+  // Subscribes for the app `*app` will hold, before it exists: main calls this before the slow part
+  // of its start (reading the OSM, building the skeleton, loading the checkpoints), so what comes
+  // on the bus meanwhile waits in LCM's queues (queue_capacity: 6 s of frames, 10 s of poses) and
+  // is handled once the app is there, in spin(). A builder restarted after a crash so loses only
+  // what came before these subscriptions (the restart delay and the exec), not its whole start.
+  static void subscribe(lcm::LCM& lcm, const std::string& semantic_channel, const BevBuilderSettings& s,
+                        const std::unique_ptr<BevBuilderApp>* app) {
+    lcm.subscribeFunction(channels::kPose, &forward<pose_t, &BevBuilderApp::onPose>, app)->setQueueCapacity(s.pose_queue);
+    lcm.subscribeFunction(semantic_channel, &forward<label_image_t, &BevBuilderApp::onLabels>, app)->setQueueCapacity(s.semantic_queue);
+    lcm.subscribeFunction(channels::kLidarPackets, &forward<lidar_packets_t, &BevBuilderApp::onLidar>, app)->setQueueCapacity(s.lidar_queue);
+    lcm.subscribeFunction(channels::kRoadEvent, &forward<road_event_t, &BevBuilderApp::onRoadEvent>, app)->setQueueCapacity(s.road_event_queue);
   }
 
   // After spin(): roads that were closing are handed over too, and the road being driven is
@@ -125,6 +129,11 @@ class BevBuilderApp {
   }
 
  private:
+  template <class M, void (BevBuilderApp::*Handle)(const lcm::ReceiveBuffer*, const std::string&, const M*)>
+  static void forward(const lcm::ReceiveBuffer* rbuf, const std::string& channel, const M* m, const std::unique_ptr<BevBuilderApp>* app) {
+    if (*app) ((**app).*Handle)(rbuf, channel, m);  // spin() runs after the app is made: always there
+  }
+
   void onPose(const lcm::ReceiveBuffer*, const std::string&, const pose_t* m) {
     const EnuPose p = toEnuPose(*m, skeleton_->frame());
     if (p.position.allFinite()) last_position_ = p.position.head<2>();

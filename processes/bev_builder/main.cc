@@ -29,6 +29,8 @@ int main(int argc, char** argv) {
     if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the map config");
     if (store.empty()) throw std::runtime_error("no map store: give --store or `store:` in the config");
     const io::StoreLock lock(store, "bev_builder");  // one BEV builder per store; a read-only store fails here
+    std::unique_ptr<BevBuilderApp> app;
+    BevBuilderApp::subscribe(process.lcm(), channel, settings, &app);  // first: the bus waits in LCM's queues while we start
     const int stale = io::removeStaleTemporaries((std::filesystem::path(store) / "bev").string()) +
                       io::removeStaleTemporaries((std::filesystem::path(store) / "bev" / "open").string());
     if (stale > 0) std::cerr << "bev_builder: removed " << stale << " temporaries a killed writer left in " << store << "/bev\n";
@@ -40,14 +42,14 @@ int main(int argc, char** argv) {
     if (options.use_lidar) options.lidar_to_vehicle = vehicle_config.lidarToVehicle();
     std::cerr << "bev_builder: " << sk->roads().size() << " atomic roads from " << osm << ", " << channel
               << (options.use_lidar ? " + LIDAR mesh" : " (flat ground)") << ", store " << store << "\n";
-    BevBuilderApp app(process, std::move(sk), camera, options, store);
-    app.setPreview(settings.preview_period_s, settings.preview_max_px);
-    app.setCheckpointPeriod(settings.checkpoint_period_s);
-    app.setRoadFrame(withRoadFrame(lanes::ExplorerOptions{}, settings.map.road_frame));
-    app.recover();
-    app.subscribe(channel, settings);
+    auto made = std::make_unique<BevBuilderApp>(process, std::move(sk), camera, options, store);
+    made->setPreview(settings.preview_period_s, settings.preview_max_px);
+    made->setCheckpointPeriod(settings.checkpoint_period_s);
+    made->setRoadFrame(withRoadFrame(lanes::ExplorerOptions{}, settings.map.road_frame));
+    made->recover();
+    app = std::move(made);
     const int rc = process.spin();
-    app.finish();
+    app->finish();
     return rc;
   } catch (const io::StoreInUseError& e) {
     std::cerr << "bev_builder: " << e.what() << "\n";

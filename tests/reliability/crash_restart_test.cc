@@ -11,10 +11,13 @@
 // then depends on the machine's timing, not on the recovery. So the BEV builder is killed just
 // after the first checkpoint it writes past the kill time (its JSON's write, seen by polling
 // <store>/bev/open/ every ~50 ms): what is tested is that everything up to the checkpoint is
-// recovered; the gap left is the restart delay and its start (printed, recovered_gap_ms).
+// recovered; the gap left is the restart delay (0.2 s) and its start up to its subscriptions,
+// made before it reads the OSM and the checkpoints (printed, recovered_gap_ms: 0.8-1.0 s with
+// two busy cores when it subscribed last, 0.6 s since).
 // The segmenter (in the path in its own run: its --oracle republication of the truth labels)
 // holds nothing to recover: the frames it did not label while down are counted by the BEV builder
-// (frames_missed, a gap in their seq), and the lanes are found again. The whole graph runs in a
+// (frames_missed, a gap in their seq), and the lanes are found again. With its restart delay at
+// 1 s, 7 frames lost (two busy cores) moved the centre lines by 5.6 cm RMS: its delay is 0.2 s. The whole graph runs in a
 // private network namespace.
 #include "core/eval/evaluate.h"
 #include "core/io/lanelet2.h"
@@ -199,9 +202,10 @@ TEST(CrashRestart, AKilledProcessLosesNoRoadAndNoLane) {
       EXPECT_EQ(counterOf(run, kill.recovered, 0), 1);
     }
     if (kill.process == "segmenter") {
-      // Its 1 s restart delay and its start: some frames (5 Hz) lost, counted, not all of them.
+      // Its 0.2 s restart delay and its start (over 0.2 s: at 5 Hz at least one frame falls in
+      // it): some frames lost, counted, not all of them.
       std::printf("segmenter: %lld frames lost while it was down (BEV builder frames_missed)\n", static_cast<long long>(run.watch.frames_missed));
-      EXPECT_GE(run.watch.frames_missed, 3);
+      EXPECT_GE(run.watch.frames_missed, 1);
       EXPECT_LE(run.watch.frames_missed, 30);
     }
     if (kill.process == "bev_builder") {

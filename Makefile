@@ -2,11 +2,12 @@
 #   make demo   installs missing Debian packages, builds, simulates a drive and maps it
 #   make test   installs missing Debian packages, builds, runs every test
 #   make fuzz   builds the fuzz harnesses (clang, ASan + UBSan) and runs each FUZZ_SECONDS (60)
+#   make replay-update  rewrites the process replay references (tests/replay) and shows the diff
 BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 DEMO_OUT ?= demo-out
 
-.PHONY: all deps configure build test demo bench fuzz clean
+.PHONY: all deps configure build test demo bench fuzz replay-update clean
 
 all: build
 
@@ -27,6 +28,11 @@ demo: build
 
 bench: build
 	@tools/bench/run_all.sh $(BUILD_DIR)
+
+# After an intended change of a process's output: new references, then review them in the diff.
+replay-update: build
+	@$(BUILD_DIR)/bin/lanemap-replay --update
+	@git --no-pager diff --stat -- tests/replay
 
 FUZZ_SECONDS ?= 60
 fuzz: deps

@@ -2,6 +2,7 @@
 
 #include "lanemap/status_t.hpp"
 #include "processes/framework/channels.h"
+#include "processes/framework/log_reader.h"
 #include "processes/framework/share_dir.h"
 
 #include <unistd.h>
@@ -13,6 +14,7 @@
 #include <ctime>
 #include <iostream>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 namespace lanemap {
@@ -106,9 +108,20 @@ Process::Process(std::string name)
   cli_.add_option("--lcm-url", lcm_url_flag_,
                   "LCM URL, e.g. udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608 "
                   "(default: config lcm_url, then $LCM_DEFAULT_URL)");
+  auto* in = cli_.add_option("--replay", replay_in_,
+                             "process replay: handle every event of this LCM log in order on an in-process bus "
+                             "(memq://), one at a time, then exit (tests/replay)");
+  auto* out = cli_.add_option("--replay-out", replay_out_, "... and write what the process publishes to this LCM log");
+  in->needs(out);
+  out->needs(in);
 }
 
-Process::~Process() = default;
+Process::~Process() {
+  if (!replay_log_) return;
+  idle_ = nullptr;  // the app is gone: what it published on its way out is in the queue
+  drainReplay(false);
+  replay_log_.reset();
+}
 
 int Process::init(int argc, char** argv) {
   try {
@@ -127,12 +140,20 @@ int Process::init(int argc, char** argv) {
     std::cerr << name_ << ": " << e.what() << "\n";
     return 2;
   }
-  const std::string url = resolveLcmUrl(lcm_url_flag_, config_);
+  const std::string url = replaying() ? std::string("memq://") : resolveLcmUrl(lcm_url_flag_, config_);
+  if (replaying()) {
+    replay_log_ = std::make_unique<lcm::LogFile>(replay_out_, "w");
+    if (!replay_log_->good()) {
+      std::cerr << name_ << ": cannot write the replay output '" << replay_out_ << "'\n";
+      return 2;
+    }
+  }
   lcm_ = std::make_unique<lcm::LCM>(url);
   if (!lcm_->good()) {
     std::cerr << name_ << ": cannot open LCM '" << (url.empty() ? "(default)" : url) << "'\n";
     return 3;
   }
+  if (replaying()) lcm_->subscribe(".*", &Process::onReplayMessage, this);  // first: sees every message
   g_stop.store(false);
   struct sigaction sa {};
   sa.sa_handler = onSignal;
@@ -177,6 +198,7 @@ void Process::publishStatus() {
 }
 
 int Process::spin() {
+  if (replaying()) return replay();
   auto next_status = std::chrono::steady_clock::now();
   while (!g_stop.load()) {
     const int rc = lcm_->handleTimeout(100);
@@ -194,6 +216,59 @@ int Process::spin() {
   setState("stopped");
   publishStatus();
   return 0;
+}
+
+int Process::replay() {
+  try {
+    LogReader in(replay_in_);
+    while (const lcm::LogEvent* ev = in.next()) {
+      if (ev->channel == channels::kStatus) continue;
+      replay_utime_ = ev->timestamp;
+      replay_inputs_.emplace_back(ev->channel, std::string(static_cast<const char*>(ev->data), static_cast<size_t>(ev->datalen)));
+      lcm_->publish(ev->channel, ev->data, static_cast<unsigned>(ev->datalen));
+      drainReplay(true);
+      if (g_stop.load()) break;
+    }
+    std::cerr << name_ << ": replayed " << in.events() << " events of " << replay_in_ << ", " << replay_events_
+              << " published so far\n";
+  } catch (const std::exception& e) {
+    std::cerr << name_ << ": replay: " << e.what() << "\n";
+    return 2;
+  }
+  setState("stopped");
+  return 0;
+}
+
+// Handles what is queued; with wait_idle, also waits for the app's worker (setIdleCheck) and
+// handles what it published, until both are done.
+void Process::drainReplay(bool wait_idle) {
+  for (;;) {
+    while (lcm_->handleTimeout(0) > 0) {
+    }
+    if (!wait_idle || !idle_) return;
+    if (idle_()) {
+      if (lcm_->handleTimeout(0) <= 0) return;  // idle and nothing came meanwhile
+      continue;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+}
+
+void Process::onReplayMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  if (!replay_inputs_.empty() && replay_inputs_.front().first == channel &&
+      replay_inputs_.front().second.size() == rbuf->data_size &&
+      std::equal(replay_inputs_.front().second.begin(), replay_inputs_.front().second.end(), static_cast<const char*>(rbuf->data))) {
+    replay_inputs_.pop_front();  // an input coming back
+    return;
+  }
+  if (channel == channels::kStatus || !replay_log_) return;
+  lcm::LogEvent ev;
+  ev.eventnum = replay_events_++;
+  ev.timestamp = replay_utime_;
+  ev.channel = channel;
+  ev.datalen = static_cast<int32_t>(rbuf->data_size);
+  ev.data = rbuf->data;
+  replay_log_->writeEvent(&ev);
 }
 
 void Process::requestStop() { g_stop.store(true); }

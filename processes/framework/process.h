@@ -20,6 +20,7 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -85,8 +86,18 @@ class Process {
   void setState(const std::string& state);
 
   // Handles LCM messages until SIGINT/SIGTERM (or requestStop()), publishing STATUS every second.
-  // Returns the exit code.
+  // Returns the exit code. With --replay: runs the process replay instead (below).
   int spin();
+
+  // Process replay (openpilot's, tests/replay): `--replay IN.lcmlog --replay-out OUT.lcmlog` puts
+  // the process on an in-process bus (memq://); spin() publishes IN's events one at a time in log
+  // order (STATUS aside), handles each to the end before the next, and writes what the process
+  // publishes (STATUS aside) to OUT, each stamped with the time of the input event it answered.
+  // Whatever the app publishes after spin() (a finish() at the end of the drive) is collected when
+  // the Process is destroyed. A process with a worker thread says when it is idle (setIdleCheck):
+  // the replay waits for it after every input, so the output does not depend on the machine.
+  bool replaying() const { return !replay_in_.empty(); }
+  void setIdleCheck(std::function<bool()> idle) { idle_ = std::move(idle); }
 
   // Publishes one STATUS message now (spin() calls it at 1 Hz).
   void publishStatus();
@@ -108,6 +119,15 @@ class Process {
   std::string state_ = "starting";
   double last_cpu_s_ = 0.0;
   std::chrono::steady_clock::time_point last_status_wall_;
+
+  int replay();
+  void drainReplay(bool wait_idle);
+  void onReplayMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  std::string replay_in_, replay_out_;
+  std::unique_ptr<lcm::LogFile> replay_log_;
+  std::deque<std::pair<std::string, std::string>> replay_inputs_;  // published, not yet seen back
+  int64_t replay_utime_ = 0, replay_events_ = 0;
+  std::function<bool()> idle_;
 };
 
 // Microseconds since the epoch, the utime of every lanemap message.

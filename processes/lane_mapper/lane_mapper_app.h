@@ -71,6 +71,10 @@ class LaneMapperApp {
     worker_ = std::thread([this] { work(); });
     auto* sub = process_.lcm().subscribe(channel, &LaneMapperApp::onBevRoad, this);
     sub->setQueueCapacity(queue);
+    process_.setIdleCheck([this] {  // process replay: wait for the worker after each input
+      std::lock_guard<std::mutex> lock(mutex_);
+      return jobs_.empty() && !busy_;
+    });
     process_.setState("ready");
   }
   ~LaneMapperApp() {
@@ -102,6 +106,7 @@ class LaneMapperApp {
         if (stop_) return;
         job = jobs_.front();
         jobs_.pop_front();
+        busy_ = true;
         process_.counters().set("queue_length", static_cast<int64_t>(jobs_.size()));
       }
       try {
@@ -111,6 +116,8 @@ class LaneMapperApp {
         process_.counters().add("roads_failed");
         std::cerr << "lane_mapper: road " << job.road.road_id << ": " << e.what() << "\n";
       }
+      std::lock_guard<std::mutex> lock(mutex_);
+      busy_ = false;
     }
   }
 
@@ -242,6 +249,7 @@ class LaneMapperApp {
   std::deque<Job> jobs_;
   double map_road_ms_max_ = 0.0;  // worker thread only
   bool stop_ = false;
+  bool busy_ = false;  // the worker is mapping a job (under mutex_)
   std::map<int64_t, map::LaneMap> roads_;
   intersections::IntersectionOptions intersection_options_;
   std::vector<osm::Restriction> restrictions_;

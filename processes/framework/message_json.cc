@@ -1,0 +1,186 @@
+#include "processes/framework/message_json.h"
+
+#include "core/bev/bev_grid.h"
+#include "lanemap/bev_preview_t.hpp"
+#include "lanemap/bev_road_t.hpp"
+#include "lanemap/lane_map_t.hpp"
+#include "lanemap/road_event_t.hpp"
+#include "processes/framework/channels.h"
+#include "processes/framework/log_reader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <string_view>
+#include <vector>
+
+namespace lanemap {
+namespace {
+
+template <class M>
+M decode(const std::string& channel, const void* data, int size) {
+  M m;
+  if (m.decode(data, 0, size) != size) throw std::runtime_error("message on " + channel + " does not decode as its registry type");
+  return m;
+}
+
+std::string fileName(const std::string& path) { return path.empty() ? path : std::filesystem::path(path).filename().string(); }
+
+uint64_t fnv1a(const void* data, int size) {
+  uint64_t h = 1469598103934665603ull;
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (int i = 0; i < size; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  return h;
+}
+
+nlohmann::json polyline(const polyline_t& p) {
+  nlohmann::json pts = nlohmann::json::array();
+  for (int i = 0; i < p.num_points; ++i) pts.push_back({p.east[i], p.north[i], p.up[i]});
+  return {{"type", p.type}, {"points", pts}};
+}
+
+}  // namespace
+
+nlohmann::json messageJson(const std::string& channel, const void* data, int size) {
+  const auto* spec = channels::find(channel);
+  const std::string_view type = spec ? spec->type : "";
+  if (type == "lanemap.road_event_t") {
+    const auto m = decode<road_event_t>(channel, data, size);
+    return {{"utime", m.utime}, {"type", m.type}, {"road_id", m.road_id}, {"from_node", m.from_node}, {"to_node", m.to_node},
+            {"previous_road_id", m.previous_road_id}, {"intersection_id", m.intersection_id}, {"distance_m", m.distance_m},
+            {"detail", m.detail}};
+  }
+  if (type == "lanemap.bev_road_t") {
+    const auto m = decode<bev_road_t>(channel, data, size);
+    nlohmann::json grid;  // the grid file it names, as it is now: per layer, the sum of its counts
+    std::error_code ec;
+    if (!m.path.empty() && std::filesystem::is_regular_file(m.path, ec)) {
+      const bev::BevGrid g = bev::BevGrid::load(m.path);
+      std::vector<int64_t> sums(bev::kNumLayers, 0);
+      const int cells = g.options().tile_cells * g.options().tile_cells;
+      g.forEachTile([&](const bev::BevGrid::Cell&, const uint16_t* counts) {
+        for (int l = 0; l < bev::kNumLayers; ++l) {
+          for (int i = 0; i < cells; ++i) sums[l] += counts[l * cells + i];
+        }
+      });
+      grid = {{"frames", g.frames()}, {"tiles", g.tileCount()}};
+      for (int l = 0; l < bev::kNumLayers; ++l) grid[bev::toString(static_cast<bev::Layer>(l))] = sums[l];
+    }
+    return {{"grid", grid}, {"utime", m.utime}, {"road_id", m.road_id}, {"from_node", m.from_node}, {"to_node", m.to_node},
+            {"path", fileName(m.path)}, {"origin_east", m.origin_east}, {"origin_north", m.origin_north},
+            {"resolution_m", m.resolution_m}, {"width", m.width}, {"height", m.height}, {"num_frames", m.num_frames}};
+  }
+  if (type == "lanemap.lane_map_t") {
+    const auto m = decode<lane_map_t>(channel, data, size);
+    nlohmann::json lanes = nlohmann::json::array();
+    for (const auto& l : m.lanes) {
+      lanes.push_back({{"lane_id", l.lane_id}, {"index_from_left", l.index_from_left}, {"centre", polyline(l.centre)},
+                       {"left_boundary", polyline(l.left_boundary)}, {"right_boundary", polyline(l.right_boundary)},
+                       {"successors", l.successors}, {"confidence", l.confidence}});
+    }
+    return {{"utime", m.utime}, {"kind", m.kind}, {"id", m.id}, {"origin_latitude", m.origin_latitude},
+            {"origin_longitude", m.origin_longitude}, {"origin_altitude", m.origin_altitude}, {"lanes", lanes},
+            {"map_path", fileName(m.map_path)}, {"partial_station_m", m.partial_station_m},
+            {"partial_road_length_m", m.partial_road_length_m}};
+  }
+  if (type == "lanemap.bev_preview_t") {
+    const auto m = decode<bev_preview_t>(channel, data, size);
+    return {{"road_id", m.road_id}, {"num_frames", m.num_frames}, {"west", m.west}, {"south", m.south},
+            {"east", m.east}, {"north", m.north}, {"png_bytes", m.size}};  // utime is the wall clock
+  }
+  return {{"bytes", size}, {"fnv1a", fnv1a(data, size)}};
+}
+
+std::string logJsonLines(const std::string& path) {
+  LogReader in(path);
+  std::string out;
+  while (const lcm::LogEvent* ev = in.next()) {
+    const nlohmann::json line{{"t", ev->timestamp}, {"channel", ev->channel}, {"msg", messageJson(ev->channel, ev->data, ev->datalen)}};
+    out += line.dump() + "\n";
+  }
+  return out;
+}
+
+namespace {
+
+std::vector<nlohmann::json> parseLines(const std::string& text, const char* which) {
+  std::vector<nlohmann::json> out;
+  size_t start = 0;
+  int n = 0;
+  while (start < text.size()) {
+    size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    ++n;
+    if (end > start) {
+      auto j = nlohmann::json::parse(text.substr(start, end - start), nullptr, false);
+      if (j.is_discarded()) throw std::runtime_error(std::string(which) + " line " + std::to_string(n) + " is not JSON");
+      out.push_back(std::move(j));
+    }
+    start = end + 1;
+  }
+  return out;
+}
+
+std::string brief(const nlohmann::json& j) {
+  std::string s = j.dump();
+  return s.size() > 80 ? s.substr(0, 77) + "..." : s;
+}
+
+void compareValue(const nlohmann::json& ref, const nlohmann::json& act, const std::string& where, double abs_tol,
+                  double rel_tol, std::vector<std::string>& out, size_t max_lines) {
+  if (out.size() >= max_lines) return;
+  if (ref.is_number() && act.is_number()) {
+    const double a = ref.get<double>(), b = act.get<double>();
+    if (!(std::abs(a - b) <= abs_tol + rel_tol * std::abs(a))) out.push_back(where + ": " + brief(ref) + " -> " + brief(act));
+    return;
+  }
+  if (ref.type() != act.type()) {
+    out.push_back(where + ": " + brief(ref) + " -> " + brief(act));
+    return;
+  }
+  if (ref.is_object()) {
+    for (auto it = ref.begin(); it != ref.end(); ++it) {
+      if (!act.contains(it.key())) {
+        out.push_back(where + "." + it.key() + ": missing");
+      } else {
+        compareValue(it.value(), act[it.key()], where + "." + it.key(), abs_tol, rel_tol, out, max_lines);
+      }
+    }
+    for (auto it = act.begin(); it != act.end(); ++it) {
+      if (!ref.contains(it.key())) out.push_back(where + "." + it.key() + ": new, " + brief(it.value()));
+    }
+    return;
+  }
+  if (ref.is_array()) {
+    if (ref.size() != act.size()) {
+      out.push_back(where + ": " + std::to_string(ref.size()) + " items -> " + std::to_string(act.size()));
+      return;
+    }
+    for (size_t i = 0; i < ref.size(); ++i) compareValue(ref[i], act[i], where + "[" + std::to_string(i) + "]", abs_tol, rel_tol, out, max_lines);
+    return;
+  }
+  if (ref != act) out.push_back(where + ": " + brief(ref) + " -> " + brief(act));
+}
+
+}  // namespace
+
+std::vector<std::string> compareJsonLines(const std::string& reference, const std::string& actual, double abs_tol, double rel_tol,
+                                          size_t max_lines) {
+  const auto ref = parseLines(reference, "reference");
+  const auto act = parseLines(actual, "output");
+  std::vector<std::string> out;
+  const size_t n = std::min(ref.size(), act.size());
+  for (size_t i = 0; i < n && out.size() < max_lines; ++i) {
+    const std::string where = "line " + std::to_string(i + 1) + " (" + ref[i].value("channel", std::string("?")) + ")";
+    compareValue(ref[i], act[i], where, abs_tol, rel_tol, out, max_lines);
+  }
+  if (ref.size() != act.size() && out.size() < max_lines) {
+    out.push_back(std::to_string(ref.size()) + " messages in the reference, " + std::to_string(act.size()) + " published" +
+                  (act.size() > ref.size() ? "; the first new: " + brief(act[ref.size()]) : "; the first missing: " + brief(ref[act.size()])));
+  }
+  return out;
+}
+
+}  // namespace lanemap

@@ -1,0 +1,104 @@
+// Process replay (issue 19, openpilot's manner): every case of tests/replay/cases.yaml (the road
+// tracker, the BEV builder, the lane mapper, each over its recorded input) publishes what its
+// reference says; a reference changed by more than the tolerance fails, naming the message and the
+// field; the comparison itself (processes/framework/message_json.h) tells a number within the
+// tolerance from one beyond it, a missing field, a new one and a missing message.
+#include "processes/framework/message_json.h"
+#include "tests/common/temp_dir.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace {
+
+namespace lt = lanemap::testing;
+
+const std::string kSource = LANEMAP_SOURCE_DIR;
+const std::string kReplay = std::string(LANEMAP_BIN_DIR) + "/lanemap-replay";
+
+struct ReplayRun {
+  int rc = -1;
+  std::string out;
+};
+
+ReplayRun run(const std::string& args) {
+  ReplayRun r;
+  FILE* p = ::popen((kReplay + " " + args + " 2>&1").c_str(), "r");
+  if (!p) return r;
+  char buf[4096];
+  size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  const int status = ::pclose(p);
+  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+TEST(ProcessReplay, EveryProcessPublishesWhatItsReferenceSays) {
+  const ReplayRun r = run("");
+  EXPECT_EQ(r.rc, 0) << r.out;
+  for (const char* line : {"road_tracker: 3 messages, as the reference", "bev_builder: 2 messages, as the reference",
+                           "lane_mapper: 2 messages, as the reference", "3 case(s) run, 0 differ"}) {
+    EXPECT_NE(r.out.find(line), std::string::npos) << line << "\n" << r.out;
+  }
+}
+
+TEST(ProcessReplay, AReferenceChangedBeyondTheToleranceFailsNamingTheField) {
+  lt::TempDir tmp("replay");
+  // The road tracker's reference with the first event's distance moved by 1 mm.
+  std::string ref = readFile(kSource + "/tests/replay/road_tracker.reference.jsonl");
+  const size_t eol = ref.find('\n');
+  ASSERT_NE(eol, std::string::npos);
+  auto first = nlohmann::json::parse(ref.substr(0, eol));
+  const double d = first["msg"]["distance_m"].get<double>();
+  first["msg"]["distance_m"] = d + 1e-3;
+  std::ofstream(tmp.str("road_tracker.reference.jsonl")) << first.dump() << "\n" << ref.substr(eol + 1);
+  std::ofstream(tmp.str("cases.yaml")) << "cases:\n"
+                                       << "  - name: road_tracker\n"
+                                       << "    command: [lanemap-road-tracker, --config, config/road_tracker.yaml, --osm, tests/replay/roads.osm]\n"
+                                       << "    input: tests/replay/road_tracker.input.lcmlog\n"
+                                       << "    reference: " << tmp.str("road_tracker.reference.jsonl") << "\n";
+  const ReplayRun r = run("--cases " + tmp.str("cases.yaml"));
+  EXPECT_EQ(r.rc, 1) << r.out;
+  EXPECT_NE(r.out.find("line 1 (ROAD_EVENT).msg.distance_m"), std::string::npos) << r.out;
+  // --update writes what was published back: the reference is the original again.
+  const ReplayRun u = run("--cases " + tmp.str("cases.yaml") + " --update");
+  EXPECT_EQ(u.rc, 0) << u.out;
+  EXPECT_EQ(readFile(tmp.str("road_tracker.reference.jsonl")), ref);
+  EXPECT_EQ(run("--cases " + tmp.str("cases.yaml")).rc, 0);
+}
+
+TEST(MessageJson, NumbersWithinTheToleranceAgreeEverythingElseExactly) {
+  const std::string ref = R"({"channel":"ROAD_EVENT","msg":{"d":1.0,"s":"a","v":[1,2]}})" "\n"
+                          R"({"channel":"BEV_ROAD","msg":{"n":3}})" "\n";
+  EXPECT_TRUE(lanemap::compareJsonLines(ref, ref).empty());
+  const std::string close = R"({"channel":"ROAD_EVENT","msg":{"d":1.0000005,"s":"a","v":[1,2]}})" "\n"
+                            R"({"channel":"BEV_ROAD","msg":{"n":3}})" "\n";
+  EXPECT_TRUE(lanemap::compareJsonLines(ref, close).empty());
+  const std::string far = R"({"channel":"ROAD_EVENT","msg":{"d":1.00001,"s":"b","v":[1,2,3]}})" "\n"
+                          R"({"channel":"BEV_ROAD","msg":{"m":3}})" "\n";
+  const auto diffs = lanemap::compareJsonLines(ref, far);
+  ASSERT_EQ(diffs.size(), 5u);
+  EXPECT_EQ(diffs[0].rfind("line 1 (ROAD_EVENT).msg.d: 1.0 -> 1.00001", 0), 0u) << diffs[0];
+  EXPECT_EQ(diffs[1].rfind("line 1 (ROAD_EVENT).msg.s:", 0), 0u) << diffs[1];
+  EXPECT_EQ(diffs[2], "line 1 (ROAD_EVENT).msg.v: 2 items -> 3");
+  EXPECT_EQ(diffs[3], "line 2 (BEV_ROAD).msg.n: missing");
+  EXPECT_EQ(diffs[4], "line 2 (BEV_ROAD).msg.m: new, 3");
+  const auto shorter = lanemap::compareJsonLines(ref, ref.substr(0, ref.find('\n') + 1));
+  ASSERT_EQ(shorter.size(), 1u);
+  EXPECT_EQ(shorter[0].rfind("2 messages in the reference, 1 published; the first missing:", 0), 0u) << shorter[0];
+}
+
+}  // namespace

@@ -13,7 +13,8 @@ namespace lanemap::bev {
 
 namespace {
 
-constexpr char kMagic[8] = {'L', 'M', 'B', 'E', 'V', '0', '0', '1'};
+constexpr char kMagic[8] = {'L', 'M', 'B', 'E', 'V', '0', '0', '2'};
+constexpr char kMagicV1[8] = {'L', 'M', 'B', 'E', 'V', '0', '0', '1'};  // no traversals
 
 int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
@@ -114,6 +115,7 @@ void BevGrid::save(const std::string& path) const {
   put<int32_t>(out, options_.tile_cells);
   put<int32_t>(out, kNumLayers);
   put<int32_t>(out, frames_);
+  put<int32_t>(out, traversals());
   put<uint64_t>(out, tiles_.size());
   // Sorted by key so the same grid always gives the same bytes.
   std::vector<Key> keys;
@@ -131,7 +133,8 @@ BevGrid BevGrid::load(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw BevError("cannot read BEV grid file: " + path);
   const std::string in((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  if (in.size() < sizeof(kMagic) || std::memcmp(in.data(), kMagic, sizeof(kMagic)) != 0) {
+  const bool v1 = in.size() >= sizeof(kMagicV1) && std::memcmp(in.data(), kMagicV1, sizeof(kMagicV1)) == 0;
+  if (!v1 && (in.size() < sizeof(kMagic) || std::memcmp(in.data(), kMagic, sizeof(kMagic)) != 0)) {
     throw BevError("not a lanemap BEV grid file (bad magic): " + path);
   }
   size_t pos = sizeof(kMagic);
@@ -142,6 +145,10 @@ BevGrid BevGrid::load(const std::string& path) {
   if (layers != kNumLayers) throw BevError("BEV grid file has " + std::to_string(layers) + " layers, expected " + std::to_string(kNumLayers) + ": " + path);
   BevGrid grid(opt);  // validates resolution and tile size
   grid.frames_ = get<int32_t>(in, pos, path);
+  if (!v1) {
+    grid.traversals_ = get<int32_t>(in, pos, path);
+    if (grid.traversals_ < 0) throw BevError("BEV grid file has a negative traversal count: " + path);
+  }
   const uint64_t n = get<uint64_t>(in, pos, path);
   const size_t tile_bytes = static_cast<size_t>(kNumLayers) * opt.tile_cells * opt.tile_cells * sizeof(uint16_t);
   if (n > (in.size() - pos) / (tile_bytes + sizeof(int64_t))) throw BevError("BEV grid file truncated: " + path);
@@ -154,6 +161,23 @@ BevGrid BevGrid::load(const std::string& path) {
   }
   if (pos != in.size()) throw BevError("BEV grid file has trailing bytes: " + path);
   return grid;
+}
+
+BevGrid::Header BevGrid::readHeader(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw BevError("cannot read BEV grid file: " + path);
+  std::string in(8 + 8 + 4 + 4 + 4 + 4, '\0');
+  f.read(in.data(), static_cast<std::streamsize>(in.size()));
+  in.resize(static_cast<size_t>(f.gcount()));
+  const bool v1 = in.size() >= sizeof(kMagicV1) && std::memcmp(in.data(), kMagicV1, sizeof(kMagicV1)) == 0;
+  if (!v1 && (in.size() < sizeof(kMagic) || std::memcmp(in.data(), kMagic, sizeof(kMagic)) != 0)) {
+    throw BevError("not a lanemap BEV grid file (bad magic): " + path);
+  }
+  size_t pos = sizeof(kMagic) + 8 + 4 + 4;  // resolution, tile size, layers
+  BevGrid g;
+  g.frames_ = get<int32_t>(in, pos, path);
+  if (!v1) g.traversals_ = std::max(0, get<int32_t>(in, pos, path));
+  return {g.frames(), g.traversals()};
 }
 
 }  // namespace lanemap::bev

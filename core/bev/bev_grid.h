@@ -77,6 +77,11 @@ class BevGrid {
   // Frames accumulated (kept by the caller through addFrame()).
   int frames() const { return frames_; }
   void addFrame() { ++frames_; }
+  // Traversals (drives along the road) whose evidence the grid holds: a grid with frames that was
+  // never merged (one drive's accumulation, a file of format 001) is one; bev_store.h mergeGrid
+  // adds the source's to the destination's.
+  int traversals() const { return traversals_ > 0 ? traversals_ : (frames_ > 0 ? 1 : 0); }
+  void setTraversals(int n) { traversals_ = n; }
 
   // Cells spanned by the allocated tiles (empty box when none).
   Eigen::AlignedBox2i cellBounds() const;
@@ -90,10 +95,17 @@ class BevGrid {
     for (const auto& [key, tile] : tiles_) f(tileOrigin(key), tile.data());
   }
 
-  // Binary file (little-endian): magic "LMBEV001", resolution, tile size, frames, tiles. Written
-  // atomically (io::writeFileAtomically). load() throws BevError on a bad or truncated file.
+  // Binary file (little-endian): magic "LMBEV002", resolution, tile size, layers, frames,
+  // traversals, tiles. Written atomically (io::writeFileAtomically). load() also reads format 001
+  // (no traversals: an older store) and throws BevError on a bad or truncated file.
   void save(const std::string& path) const;
   static BevGrid load(const std::string& path);
+  // Frames and traversals from a grid file's header, without reading its tiles (a city's worth of
+  // roads: lanemap-coverage). Throws BevError on a file that is not a grid.
+  struct Header {
+    int frames = 0, traversals = 0;
+  };
+  static Header readHeader(const std::string& path);
 
  private:
   using Key = int64_t;
@@ -101,6 +113,7 @@ class BevGrid {
   Cell tileOrigin(Key k) const;
   BevGridOptions options_;
   int frames_ = 0;
+  int traversals_ = 0;  // 0: not counted (see traversals())
   std::unordered_map<Key, std::vector<uint16_t>> tiles_;
 };
 

@@ -27,7 +27,9 @@ void mergeGrid(const BevGrid& src, BevGrid& dst, const Eigen::Vector2i& shift) {
       }
     }
   });
+  const int traversals = dst.traversals() + src.traversals();
   for (int i = 0; i < src.frames(); ++i) dst.addFrame();
+  dst.setTraversals(traversals);
 }
 
 std::string roadGridPath(const std::string& store, int64_t road_id) {
@@ -186,7 +188,7 @@ int64_t storedFrames(const std::string& path) {
   if (!std::filesystem::exists(path, ec)) return 0;
   std::ifstream f(path, std::ios::binary);
   char header[28];
-  if (!f.read(header, sizeof(header)) || std::memcmp(header, "LMBEV001", 8) != 0) return -1;
+  if (!f.read(header, sizeof(header)) || (std::memcmp(header, "LMBEV001", 8) != 0 && std::memcmp(header, "LMBEV002", 8) != 0)) return -1;
   int32_t frames = 0;
   std::memcpy(&frames, header + 24, sizeof(frames));
   return frames;

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <string>
 
 namespace {
 
@@ -79,6 +81,40 @@ TEST(BevGrid, SavesAndLoadsExactly) {
   EXPECT_THROW(BevGrid::load(path), BevError);
   std::remove(path.c_str());
   EXPECT_THROW(BevGrid::load(path), BevError);
+}
+
+// Format 002 carries the traversal count; a file of format 001 (an older store: no count) loads
+// with the same counts and frames, as one traversal.
+TEST(BevGrid, TraversalsAreSavedAndAnOlderFileIsOneTraversal) {
+  BevGrid g(lanemap::bev::BevGridOptions{0.1, 16});
+  g.add({3, 4}, Layer::kSolidLine, 5);
+  g.addFrame();
+  EXPECT_EQ(g.traversals(), 1) << "frames and never merged: one drive";
+  EXPECT_EQ(BevGrid().traversals(), 0);
+  g.setTraversals(3);
+  const lanemap::testing::TempDir dir("bev-grid-v1");
+  const std::string path = dir.str("grid.bev");
+  g.save(path);
+  EXPECT_EQ(BevGrid::load(path).traversals(), 3);
+  const auto header = BevGrid::readHeader(path);
+  EXPECT_EQ(header.frames, 1);
+  EXPECT_EQ(header.traversals, 3);
+
+  // The same grid as format 001 wrote it: magic ...001, no traversal field after the frames.
+  std::ifstream f(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  ASSERT_EQ(bytes.substr(0, 8), "LMBEV002");
+  bytes[7] = '1';
+  bytes.erase(8 + 8 + 4 + 4 + 4, 4);  // magic, resolution, tile size, layers, frames | traversals
+  const std::string old_path = dir.str("old.bev");
+  std::ofstream(old_path, std::ios::binary) << bytes;
+  const BevGrid old = BevGrid::load(old_path);
+  EXPECT_EQ(old.frames(), 1);
+  EXPECT_EQ(old.count(BevGrid::Cell(3, 4), Layer::kSolidLine), 5);
+  EXPECT_EQ(old.traversals(), 1);
+  EXPECT_EQ(BevGrid::readHeader(old_path).traversals, 1);
+  std::ofstream(old_path) << "LMBEV003 and more bytes than a header";
+  EXPECT_THROW(BevGrid::readHeader(old_path), BevError);
 }
 
 TEST(BevGrid, BadOptionsAreRefused) {

@@ -45,6 +45,7 @@ TEST(PartialStore, ADriveEndingOnARoadStoresItPartialAndALaterDriveCompletesIt) 
   EXPECT_DOUBLE_EQ(p->road_length_m, 60.0);
   EXPECT_EQ(p->frames, 30);
   EXPECT_EQ(partialRoads(store).size(), 1u);
+  EXPECT_EQ(BevGrid::readHeader(partialGridPath(store, 7)).traversals, 1);
 
   // Drive 2 ends on it too, less far: merged (aligned), the further station kept.
   s = storePartialRoad(store, pass({-0.2, 0.3}, 2, 0, 30), 18.0, 60.0);
@@ -57,6 +58,7 @@ TEST(PartialStore, ADriveEndingOnARoadStoresItPartialAndALaterDriveCompletesIt) 
   ASSERT_TRUE(p.has_value());
   EXPECT_DOUBLE_EQ(p->station_m, 25.0);
   EXPECT_EQ(p->frames, 60);
+  EXPECT_EQ(BevGrid::readHeader(partialGridPath(store, 7)).traversals, 2);
 
   // Drive 3 closes the road: the partial evidence joins it, the road is complete.
   s = storeRoad(store, pass({0.1, 0.1}, 3));
@@ -69,6 +71,7 @@ TEST(PartialStore, ADriveEndingOnARoadStoresItPartialAndALaterDriveCompletesIt) 
   EXPECT_TRUE(partialRoads(store).empty());
   const BevGrid stored = BevGrid::load(roadGridPath(store, 7));
   EXPECT_EQ(stored.frames(), 90);
+  EXPECT_EQ(stored.traversals(), 3) << "two partial drives and the one that closed it";
   // Aligned: the line stays sharp (the three passes' offsets differ by up to 0.7 m).
   EXPECT_LT(solidLine(stored).second, solidLine(traversal({0, 0}, 9)).second + 0.05);
 
@@ -78,6 +81,9 @@ TEST(PartialStore, ADriveEndingOnARoadStoresItPartialAndALaterDriveCompletesIt) 
   EXPECT_TRUE(s.merged);
   EXPECT_EQ(s.frames, 120);
   EXPECT_FALSE(std::filesystem::exists(partialGridPath(store, 7)));
+  const auto header = BevGrid::readHeader(roadGridPath(store, 7));
+  EXPECT_EQ(header.frames, 120);
+  EXPECT_EQ(header.traversals, 4);
 }
 
 TEST(PartialStore, ACrashAfterCompletingDoesNotMergeThePartialTwice) {

@@ -1,0 +1,220 @@
+#include "core/mapping/coverage.h"
+
+#include "core/bev/bev_grid.h"
+#include "core/bev/bev_store.h"
+#include "core/io/lanelet2.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <cmath>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+namespace lanemap::mapping {
+
+const char* toString(RoadState s) {
+  switch (s) {
+    case RoadState::kNeverDriven: return "never_driven";
+    case RoadState::kDriven: return "driven";
+    case RoadState::kPartial: return "partial";
+    case RoadState::kMapped: return "mapped";
+  }
+  return "?";
+}
+
+int CityCoverage::count(RoadState s) const {
+  return static_cast<int>(std::count_if(roads.begin(), roads.end(), [&](const RoadCoverage& r) { return r.state == s; }));
+}
+
+CityCoverage cityCoverage(const skeleton::Skeleton& sk, const std::string& store) {
+  namespace fs = std::filesystem;
+  const auto grids = bev::roadFiles((fs::path(store) / "bev").string(), ".bev");
+  const auto partial_grids = bev::roadFiles((fs::path(store) / "bev" / "partial").string(), ".bev");
+  const auto lane_files = bev::roadFiles((fs::path(store) / "lanes").string(), ".osm");
+  const auto& origin = sk.frame().origin();
+  io::Lanelet2ReadOptions ro;
+  ro.origin_alt = origin.alt;
+  CityCoverage out;
+  for (const auto& road : sk.roads()) {
+    RoadCoverage c;
+    c.road_id = road.id;
+    c.from = road.from;
+    c.to = road.to;
+    c.length_m = road.length;
+    for (const auto* files : {&grids, &partial_grids}) {
+      const auto it = files->find(road.id);
+      if (it == files->end()) continue;
+      try {
+        const auto h = bev::BevGrid::readHeader(it->second);
+        c.traversals += h.traversals;
+        c.frames += h.frames;
+      } catch (const std::exception& e) {
+        c.problems.push_back(e.what());
+      }
+    }
+    if (c.frames > 0) c.state = RoadState::kDriven;
+    if (const auto it = lane_files.find(road.id); it != lane_files.end()) {
+      try {
+        const map::LaneMap m = io::readLanelet2(it->second, origin.lat, origin.lon, ro);
+        std::set<int> lanes;
+        double conf_sum = 0.0, station = 0.0;
+        int rated = 0;
+        bool partial = false;
+        for (const auto& ll : m.lanelets) {
+          if (ll.kind != map::LaneletKind::kRoad) continue;
+          lanes.insert(ll.index_from_left);
+          if (ll.confidence) {
+            conf_sum += *ll.confidence;
+            ++rated;
+          }
+          if (ll.partial) {
+            partial = true;
+            station = std::max(station, ll.partial->station_m);
+          }
+        }
+        c.lanes = static_cast<int>(lanes.size());
+        if (rated > 0) c.confidence = conf_sum / rated;
+        if (c.lanes > 0) {
+          c.state = partial ? RoadState::kPartial : RoadState::kMapped;
+          c.mapped_m = partial ? std::clamp(station, 0.0, c.length_m) : c.length_m;
+        }
+      } catch (const std::exception& e) {
+        c.problems.push_back(e.what());
+      }
+    }
+    out.total_m += c.length_m;
+    out.mapped_m += c.mapped_m;
+    out.roads.push_back(std::move(c));
+  }
+  std::sort(out.roads.begin(), out.roads.end(), [](const RoadCoverage& a, const RoadCoverage& b) { return a.road_id < b.road_id; });
+  return out;
+}
+
+namespace {
+
+struct Planner {
+  const skeleton::Skeleton& sk;
+  double speed;
+  int lookahead;
+  std::map<int64_t, std::vector<const skeleton::AtomicRoad*>> out_of;  // intersection -> roads leaving it
+  std::map<int64_t, double> left;                                      // road -> unmapped length left
+
+  double seconds(const skeleton::AtomicRoad& r) const { return r.length / speed; }
+  double gain(int64_t road) const {
+    const auto it = left.find(road);
+    return it == left.end() ? 0.0 : it->second;
+  }
+
+  // The roads one may take after `prev` (nullptr: at the start): those leaving its end, but not
+  // straight back (no U-turns: a driver avoids them, the simulator cannot make them).
+  template <class F>
+  void next(int64_t at, const skeleton::AtomicRoad* prev, F&& f) const {
+    const auto it = out_of.find(at);
+    if (it == out_of.end()) return;
+    for (const auto* r : it->second) {
+      if (prev && prev->reverse_id == r->id) continue;
+      f(r);
+    }
+  }
+
+  // The best path of up to `depth` roads from `at` within `budget` s: (gain, time, first road).
+  void search(int64_t at, const skeleton::AtomicRoad* prev, int depth, double budget, double gain_so_far, double time_so_far,
+              const skeleton::AtomicRoad* first, std::set<int64_t>& used, double& best_gain, double& best_time,
+              const skeleton::AtomicRoad*& best_first) const {
+    if (first && (gain_so_far > best_gain + 1e-9 || (std::abs(gain_so_far - best_gain) <= 1e-9 && gain_so_far > 0 && time_so_far < best_time))) {
+      best_gain = gain_so_far;
+      best_time = time_so_far;
+      best_first = first;
+    }
+    if (depth == 0) return;
+    next(at, prev, [&](const skeleton::AtomicRoad* r) {
+      const double t = time_so_far + seconds(*r);
+      if (t > budget) return;
+      const bool fresh = used.insert(r->id).second;
+      search(r->to, r, depth - 1, budget, gain_so_far + (fresh ? gain(r->id) : 0.0), t, first ? first : r, used, best_gain, best_time,
+             best_first);
+      if (fresh) used.erase(r->id);
+    });
+  }
+
+  // The quickest way (no U-turns: a search over roads, not intersections) from `at`, arrived at by
+  // `prev`, to a road with something left, that road included; empty when none is in reach.
+  std::vector<const skeleton::AtomicRoad*> toNearestNew(int64_t at, const skeleton::AtomicRoad* prev, double budget) const {
+    std::set<int64_t> done;
+    std::map<int64_t, double> best;                      // road -> quickest time at its end so far
+    std::map<int64_t, const skeleton::AtomicRoad*> via;  // road -> the road before it on that way
+    std::set<std::pair<double, int64_t>> queue;
+    std::map<int64_t, const skeleton::AtomicRoad*> by_id;
+    next(at, prev, [&](const skeleton::AtomicRoad* r) {
+      best[r->id] = seconds(*r);
+      by_id[r->id] = r;
+      queue.insert({seconds(*r), r->id});
+    });
+    while (!queue.empty()) {
+      const auto [t, id] = *queue.begin();
+      queue.erase(queue.begin());
+      if (t > budget) break;  // the queue is in time order: nothing further is in reach
+      if (!done.insert(id).second) continue;
+      const skeleton::AtomicRoad* r = by_id.at(id);
+      if (gain(r->id) > 0.0) {
+        std::vector<const skeleton::AtomicRoad*> path{r};
+        for (auto it = via.find(r->id); it != via.end(); it = via.find(it->second->id)) path.push_back(it->second);
+        std::reverse(path.begin(), path.end());
+        return path;
+      }
+      next(r->to, r, [&](const skeleton::AtomicRoad* n) {
+        const double nt = t + seconds(*n);
+        if (done.count(n->id) || (best.count(n->id) && best[n->id] <= nt)) return;
+        best[n->id] = nt;
+        via[n->id] = r;
+        by_id[n->id] = n;
+        queue.insert({nt, n->id});
+      });
+    }
+    return {};
+  }
+};
+
+}  // namespace
+
+CoveragePlan planCoverage(const skeleton::Skeleton& sk, const CityCoverage& coverage, int64_t start, double seconds, double speed_mps,
+                          int lookahead) {
+  if (!sk.intersection(start)) throw std::invalid_argument("no intersection " + std::to_string(start) + " in the skeleton");
+  if (!(speed_mps > 0.0)) throw std::invalid_argument("the planning speed must be > 0");
+  Planner p{sk, speed_mps, std::max(1, lookahead), {}, {}};
+  for (const auto& r : sk.roads()) p.out_of[r.from].push_back(&r);
+  for (const auto& c : coverage.roads) {
+    if (c.state != RoadState::kMapped && c.length_m - c.mapped_m > 0.0) p.left[c.road_id] = c.length_m - c.mapped_m;
+  }
+  CoveragePlan plan;
+  plan.intersections.push_back(start);
+  int64_t at = start;
+  const skeleton::AtomicRoad* prev = nullptr;
+  const auto drive = [&](const skeleton::AtomicRoad* r) {
+    plan.roads.push_back(r->id);
+    plan.intersections.push_back(r->to);
+    plan.seconds += p.seconds(*r);
+    plan.new_m += p.gain(r->id);
+    p.left.erase(r->id);
+    at = r->to;
+    prev = r;
+  };
+  for (;;) {
+    const double budget = seconds - plan.seconds;
+    double best_gain = 0.0, best_time = 0.0;
+    const skeleton::AtomicRoad* first = nullptr;
+    std::set<int64_t> used;
+    p.search(at, prev, p.lookahead, budget, 0.0, 0.0, nullptr, used, best_gain, best_time, first);
+    if (first && best_gain > 0.0) {
+      drive(first);
+      continue;
+    }
+    const auto path = p.toNearestNew(at, prev, budget);
+    if (path.empty()) break;
+    for (const auto* r : path) drive(r);
+  }
+  return plan;
+}
+
+}  // namespace lanemap::mapping

@@ -1,0 +1,60 @@
+// Coverage of a city by a map store (issue 14, `lanemap-coverage`): for every directed atomic road
+// of the skeleton whether the store maps it (its lanes in lanes/road_<id>.osm: complete, or partial
+// as far as a drive got), whether it was only driven (a BEV grid and no lanes yet), how many
+// traversals its evidence holds (the grid's header: bev/road_<id>.bev, and a partial grid), and its
+// lanes' mean confidence; and the share of the city's directed road length mapped.
+#pragma once
+
+#include "core/skeleton/skeleton.h"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace lanemap::mapping {
+
+enum class RoadState { kNeverDriven, kDriven, kPartial, kMapped };
+const char* toString(RoadState s);  // "never_driven", "driven", "partial", "mapped"
+
+struct RoadCoverage {
+  int64_t road_id = -1, from = -1, to = -1;
+  double length_m = 0.0;  // the directed road, junction to junction (AtomicRoad::length)
+  RoadState state = RoadState::kNeverDriven;
+  double mapped_m = 0.0;  // length_m when mapped, the station reached when partial, else 0
+  int traversals = 0;     // drives whose evidence the road's grids hold (complete + partial)
+  int frames = 0;
+  int lanes = 0;          // lanes of the road in its lanes file (distinct index_from_left)
+  std::optional<double> confidence;  // mean of its road lanelets' confidence, when they say
+  std::vector<std::string> problems;  // files that could not be read (the road counts unmapped)
+};
+
+struct CityCoverage {
+  std::vector<RoadCoverage> roads;  // every directed atomic road, by id
+  double total_m = 0.0, mapped_m = 0.0;
+  double share() const { return total_m > 0.0 ? mapped_m / total_m : 0.0; }
+  int count(RoadState s) const;
+};
+
+// The next drive (`lanemap-coverage --plan`): a route from an intersection that covers as much
+// directed road length not yet mapped (never driven, driven without lanes, a partial road's rest)
+// as it can in `seconds` of driving at `speed_mps`. Greedy with a look-ahead: at each
+// intersection the first road of the path of up to `lookahead` roads that covers the most new
+// length (the quicker path on a tie); where no such path starts, the quickest way to the nearest
+// road left to cover. No U-turns (a driver avoids them; the simulator cannot make them); OSM turn
+// restrictions are not known here: lanemap-sim --route refuses a route that breaks one. A dead
+// end ends the route.
+struct CoveragePlan {
+  std::vector<int64_t> roads;          // directed atomic roads in driving order
+  std::vector<int64_t> intersections;  // the first road's start, then each road's end (lanemap-sim --route)
+  double seconds = 0.0;                // driving time of the route
+  double new_m = 0.0;                  // unmapped directed length it covers
+};
+CoveragePlan planCoverage(const skeleton::Skeleton& skeleton, const CityCoverage& coverage, int64_t start_intersection,
+                          double seconds, double speed_mps = 8.0, int lookahead = 4);
+
+// Reads what `store` holds for every road of `skeleton` (the skeleton the store was built with:
+// the same OSM and map config, or the road ids do not match). A missing store is empty.
+CityCoverage cityCoverage(const skeleton::Skeleton& skeleton, const std::string& store);
+
+}  // namespace lanemap::mapping

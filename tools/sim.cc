@@ -13,6 +13,7 @@
 #include "core/io/lanelet2.h"
 #include "core/io/speed_limits.h"
 #include "core/map/simplify.h"
+#include "core/mapping/coverage.h"
 #include "core/io/map_png.h"
 #include "core/io/road_osm_writer.h"
 #include "core/osm/osm_data.h"
@@ -40,6 +41,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <random>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -161,7 +163,15 @@ int main(int argc, char** argv) {
   osm_opt->excludes(l2_opt);
   l2_opt->excludes(osm_opt);
   app.add_option("--out", out_dir, "output folder (must not exist or be empty, unless --force)")->required();
-  app.add_option("--route", route_text, "auto, or intersection node ids to pass through: id,id,...");
+  auto* route_opt = app.add_option("--route", route_text, "auto, or intersection node ids to pass through: id,id,...");
+  std::string cover_path;
+  int64_t cover_from = -1;
+  auto* cover_opt = app.add_option("--cover", cover_path,
+                                   "a coverage file (lanemap-coverage --json of the store): the route covers the most road it does "
+                                   "not list as mapped in --duration (core/mapping/coverage.h planCoverage)");
+  cover_opt->excludes(route_opt);
+  app.add_option("--cover-from", cover_from, "--cover: the intersection to start at (default: the start of a seeded road not mapped)")
+      ->needs(cover_opt);
   app.add_option("--seed", seed, "random seed: the route, speeds, pose noise and light (and the world, without --world-seed)");
   app.add_option("--world-seed", world_seed,
                  "the world's own seed (lane widths, parked cars, paint wear, ...): drives of one campaign share it and "
@@ -250,6 +260,27 @@ int main(int argc, char** argv) {
     drive.seed = seed;
     drive.duration_s = duration;
     drive.route_nodes = parseRoute(route_text);
+    nlohmann::json cover_json = nullptr;
+    if (!cover_path.empty()) {
+      const auto cov = mapping::readCoverageJson(cover_path, sk);
+      if (cover_from < 0) {  // the start of a seeded road still to cover (any road when none is)
+        std::vector<int64_t> open;
+        for (const auto& c : cov.roads) {
+          if (c.state != mapping::RoadState::kMapped) open.push_back(c.from);
+        }
+        if (open.empty()) {
+          for (const auto& c : cov.roads) open.push_back(c.from);
+        }
+        if (open.empty()) throw sim::RouteError("--cover: no roads");
+        cover_from = open[std::mt19937_64(seed * 104729 + 3)() % open.size()];
+      }
+      // Planned at 0.75 of the cruise speed: the car slows for turns and starts from standstill.
+      const auto cover_plan = mapping::planCoverage(sk, cov, cover_from, duration, 0.75 * drive.cruise_speed_mps);
+      if (cover_plan.roads.empty()) throw sim::RouteError("--cover: no road left to cover within reach of " + std::to_string(cover_from));
+      drive.route_nodes = cover_plan.intersections;
+      cover_json = {{"file", cover_path}, {"from", cover_from}, {"roads", cover_plan.roads}, {"new_m", cover_plan.new_m},
+                    {"planned_s", cover_plan.seconds}, {"share_before", cov.share()}};
+    }
     const sim::LanePlan plan = sim::planDrive(sk, world->truth(), drive);
     const sim::Trajectory trajectory(world->truth(), *world, plan, drive);
     if (!quiet) {
@@ -379,6 +410,7 @@ int main(int argc, char** argv) {
     scenario["start_utime"] = sim_options.start_utime;
     scenario["duration_s"] = trajectory.duration();
     scenario["length_m"] = trajectory.length();
+    if (!cover_json.is_null()) scenario["cover"] = cover_json;
     scenario["options"] = {{"route", route_text}, {"camera_hz", camera_hz}, {"pose_hz", pose_hz},
                            {"lidar", !no_lidar}, {"flat", world->options().flat},
                            {"keep_lane_tags", keep_lane_tags}, {"vehicle", fs::absolute(vehicle_path).string()}};

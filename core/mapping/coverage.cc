@@ -4,8 +4,11 @@
 #include "core/bev/bev_store.h"
 #include "core/io/lanelet2.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <cmath>
 #include <map>
 #include <set>
@@ -177,6 +180,54 @@ struct Planner {
 };
 
 }  // namespace
+
+CityCoverage readCoverageJson(const std::string& path, const skeleton::Skeleton& sk) {
+  std::ifstream f(path);
+  if (!f) throw std::runtime_error("cannot read coverage file '" + path + "'");
+  const auto doc = nlohmann::json::parse(f, nullptr, false);
+  if (doc.is_discarded() || !doc.contains("roads") || !doc["roads"].is_array()) {
+    throw std::runtime_error("coverage file '" + path + "' is not lanemap-coverage --json output (no roads list)");
+  }
+  std::map<int64_t, RoadCoverage> listed;
+  try {
+    for (const auto& r : doc["roads"]) {
+      RoadCoverage c;
+      c.road_id = r.at("road_id").get<int64_t>();
+      c.from = r.at("from").get<int64_t>();
+      c.to = r.at("to").get<int64_t>();
+      const auto state = r.at("state").get<std::string>();
+      c.state = state == "mapped" ? RoadState::kMapped : state == "partial" ? RoadState::kPartial
+                : state == "driven" ? RoadState::kDriven : RoadState::kNeverDriven;
+      c.mapped_m = r.value("mapped_m", 0.0);
+      c.traversals = r.value("traversals", 0);
+      const auto* road = sk.road(c.road_id);
+      if (!road || road->from != c.from || road->to != c.to) {
+        throw std::runtime_error("road " + std::to_string(c.road_id) + " runs " + std::to_string(c.from) + " -> " + std::to_string(c.to) +
+                                 " there, not so in this skeleton: the file was made from another OSM file or map config");
+      }
+      listed[c.road_id] = c;
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error("coverage file '" + path + "': " + e.what());
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error("coverage file '" + path + "': " + e.what());
+  }
+  CityCoverage out;
+  for (const auto& road : sk.roads()) {
+    RoadCoverage c;
+    if (const auto it = listed.find(road.id); it != listed.end()) c = it->second;
+    c.road_id = road.id;
+    c.from = road.from;
+    c.to = road.to;
+    c.length_m = road.length;
+    c.mapped_m = c.state == RoadState::kMapped ? road.length : std::clamp(c.mapped_m, 0.0, road.length);
+    out.total_m += c.length_m;
+    out.mapped_m += c.mapped_m;
+    out.roads.push_back(c);
+  }
+  std::sort(out.roads.begin(), out.roads.end(), [](const RoadCoverage& a, const RoadCoverage& b) { return a.road_id < b.road_id; });
+  return out;
+}
 
 CoveragePlan planCoverage(const skeleton::Skeleton& sk, const CityCoverage& coverage, int64_t start, double seconds, double speed_mps,
                           int lookahead) {

@@ -53,6 +53,12 @@ struct CoveragePlan {
 CoveragePlan planCoverage(const skeleton::Skeleton& skeleton, const CityCoverage& coverage, int64_t start_intersection,
                           double seconds, double speed_mps = 8.0, int lookahead = 4);
 
+// A coverage file (lanemap-coverage --json) read back against `skeleton`: the roads' states and
+// mapped lengths (lanemap-sim --cover plans on it). Throws std::runtime_error naming the file when
+// it cannot be read, or when a road id's ends are not the skeleton's (made from another OSM file
+// or map config); roads the file does not list count as never driven.
+CityCoverage readCoverageJson(const std::string& path, const skeleton::Skeleton& skeleton);
+
 // Reads what `store` holds for every road of `skeleton` (the skeleton the store was built with:
 // the same OSM and map config, or the road ids do not match). A missing store is empty.
 CityCoverage cityCoverage(const skeleton::Skeleton& skeleton, const std::string& store);

@@ -121,7 +121,7 @@ int main(int argc, char** argv) {
   bool list = false;
   double plan_s = 0.0, speed = 8.0;
   int64_t from = -1;
-  app.add_option("--store", store, "the map store (lanemap-bev-builder / lane mapper / lanemap-offline --store)")->required();
+  app.add_option("--store", store, "the map store (the BEV builder's and lane mapper's --store), or lanemap-offline's --out")->required();
   app.add_option("--osm", osm, "the city's OSM file, the one the store was built from")->required();
   app.add_option("--map-config", map_config, "skeleton options, as the processes read them (road ids depend on them)")->capture_default_str();
   app.add_option("--json", json_path, "write every road's coverage and the totals as JSON");
@@ -149,6 +149,10 @@ int main(int argc, char** argv) {
       }
     }
     int problems = 0;
+    for (const auto& p : cov.problems) {
+      std::fprintf(stderr, "lanemap-coverage: %s\n", p.c_str());
+      ++problems;
+    }
     for (const auto& c : cov.roads) {
       for (const auto& p : c.problems) {
         std::fprintf(stderr, "lanemap-coverage: road %lld: %s\n", static_cast<long long>(c.road_id), p.c_str());

@@ -30,6 +30,37 @@ int CityCoverage::count(RoadState s) const {
   return static_cast<int>(std::count_if(roads.begin(), roads.end(), [&](const RoadCoverage& r) { return r.state == s; }));
 }
 
+namespace {
+
+// A road's lanes from its road lanelets: their count, mean confidence, and the station a partial
+// road was mapped to (when any lanelet is partial).
+void setLanes(RoadCoverage& c, const std::vector<const map::Lanelet*>& lanelets) {
+  std::set<int> lanes;
+  double conf_sum = 0.0, station = 0.0;
+  int rated = 0;
+  bool partial = false;
+  for (const auto* ll : lanelets) {
+    if (ll->kind != map::LaneletKind::kRoad) continue;
+    lanes.insert(ll->index_from_left);
+    if (ll->confidence) {
+      conf_sum += *ll->confidence;
+      ++rated;
+    }
+    if (ll->partial) {
+      partial = true;
+      station = std::max(station, ll->partial->station_m);
+    }
+  }
+  c.lanes = static_cast<int>(lanes.size());
+  if (rated > 0) c.confidence = conf_sum / rated;
+  if (c.lanes > 0) {
+    c.state = partial ? RoadState::kPartial : RoadState::kMapped;
+    c.mapped_m = partial ? std::clamp(station, 0.0, c.length_m) : c.length_m;
+  }
+}
+
+}  // namespace
+
 CityCoverage cityCoverage(const skeleton::Skeleton& sk, const std::string& store) {
   namespace fs = std::filesystem;
   const auto grids = bev::roadFiles((fs::path(store) / "bev").string(), ".bev");
@@ -38,6 +69,24 @@ CityCoverage cityCoverage(const skeleton::Skeleton& sk, const std::string& store
   const auto& origin = sk.frame().origin();
   io::Lanelet2ReadOptions ro;
   ro.origin_alt = origin.alt;
+  // Without per-road files (lanemap-offline's output folder): the whole map, by road id.
+  map::LaneMap whole;
+  std::map<int64_t, std::vector<const map::Lanelet*>> whole_by_road;
+  std::string whole_problem;
+  if (lane_files.empty()) {
+    std::error_code ec;
+    for (const char* name : {"lane_map.osm", "map.osm"}) {
+      const fs::path path = fs::path(store) / name;
+      if (!fs::is_regular_file(path, ec)) continue;
+      try {
+        whole = io::readLanelet2(path.string(), origin.lat, origin.lon, ro);
+      } catch (const std::exception& e) {
+        whole_problem = e.what();
+      }
+      break;
+    }
+    for (const auto& ll : whole.lanelets) whole_by_road[ll.road_id].push_back(&ll);
+  }
   CityCoverage out;
   for (const auto& road : sk.roads()) {
     RoadCoverage c;
@@ -60,37 +109,21 @@ CityCoverage cityCoverage(const skeleton::Skeleton& sk, const std::string& store
     if (const auto it = lane_files.find(road.id); it != lane_files.end()) {
       try {
         const map::LaneMap m = io::readLanelet2(it->second, origin.lat, origin.lon, ro);
-        std::set<int> lanes;
-        double conf_sum = 0.0, station = 0.0;
-        int rated = 0;
-        bool partial = false;
-        for (const auto& ll : m.lanelets) {
-          if (ll.kind != map::LaneletKind::kRoad) continue;
-          lanes.insert(ll.index_from_left);
-          if (ll.confidence) {
-            conf_sum += *ll.confidence;
-            ++rated;
-          }
-          if (ll.partial) {
-            partial = true;
-            station = std::max(station, ll.partial->station_m);
-          }
-        }
-        c.lanes = static_cast<int>(lanes.size());
-        if (rated > 0) c.confidence = conf_sum / rated;
-        if (c.lanes > 0) {
-          c.state = partial ? RoadState::kPartial : RoadState::kMapped;
-          c.mapped_m = partial ? std::clamp(station, 0.0, c.length_m) : c.length_m;
-        }
+        std::vector<const map::Lanelet*> lanelets;
+        for (const auto& ll : m.lanelets) lanelets.push_back(&ll);
+        setLanes(c, lanelets);
       } catch (const std::exception& e) {
         c.problems.push_back(e.what());
       }
+    } else if (const auto w = whole_by_road.find(road.id); w != whole_by_road.end()) {
+      setLanes(c, w->second);
     }
     out.total_m += c.length_m;
     out.mapped_m += c.mapped_m;
     out.roads.push_back(std::move(c));
   }
   std::sort(out.roads.begin(), out.roads.end(), [](const RoadCoverage& a, const RoadCoverage& b) { return a.road_id < b.road_id; });
+  if (!whole_problem.empty()) out.problems.push_back(whole_problem);
   return out;
 }
 

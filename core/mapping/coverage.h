@@ -32,6 +32,7 @@ struct RoadCoverage {
 struct CityCoverage {
   std::vector<RoadCoverage> roads;  // every directed atomic road, by id
   double total_m = 0.0, mapped_m = 0.0;
+  std::vector<std::string> problems;  // a whole-map file that could not be read
   double share() const { return total_m > 0.0 ? mapped_m / total_m : 0.0; }
   int count(RoadState s) const;
 };
@@ -60,7 +61,9 @@ CoveragePlan planCoverage(const skeleton::Skeleton& skeleton, const CityCoverage
 CityCoverage readCoverageJson(const std::string& path, const skeleton::Skeleton& skeleton);
 
 // Reads what `store` holds for every road of `skeleton` (the skeleton the store was built with:
-// the same OSM and map config, or the road ids do not match). A missing store is empty.
+// the same OSM and map config, or the road ids do not match). A missing store is empty. A folder
+// without lanes/road_<id>.osm files (lanemap-offline's --out) is read from its whole map,
+// lane_map.osm or map.osm, by the lanelets' road ids.
 CityCoverage cityCoverage(const skeleton::Skeleton& skeleton, const std::string& store);
 
 }  // namespace lanemap::mapping

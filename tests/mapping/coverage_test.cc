@@ -147,6 +147,39 @@ TEST(Coverage, EveryDirectedRoadSaysWhatTheStoreHoldsOfIt) {
   EXPECT_EQ(cityCoverage(sk, s.dir.str("no-such-store")).mapped_m, 0.0);
 }
 
+// lanemap-offline's --out has no lanes/ folder: its map.osm is read by the lanelets' road ids.
+TEST(Coverage, AnOfflineOutputFolderIsReadFromItsWholeMap) {
+  const auto sk = cityOf();
+  lanemap::testing::TempDir dir("coverage-offline");
+  const auto& a = sk.roads()[3];
+  const auto& b = sk.roads()[4];
+  map::LaneMap m = lanesOf(a, sk, {0.9, 0.7, 0.5});
+  const map::LaneMap mb = lanesOf(b, sk, {0.4}, 10.0);
+  m.lines.insert(m.lines.end(), mb.lines.begin(), mb.lines.end());
+  m.lanelets.insert(m.lanelets.end(), mb.lanelets.begin(), mb.lanelets.end());
+  io::writeLanelet2(m, dir.str("map.osm"));
+  fs::create_directories(dir.str("bev"));
+  gridOf(5).save(bev::roadGridPath(dir.str(), a.id));
+  const CityCoverage cov = cityCoverage(sk, dir.str());
+  EXPECT_TRUE(cov.problems.empty());
+  EXPECT_EQ(cov.count(RoadState::kMapped), 1);
+  EXPECT_EQ(cov.count(RoadState::kPartial), 1);
+  for (const auto& c : cov.roads) {
+    if (c.road_id == a.id) {
+      EXPECT_EQ(c.lanes, 3);
+      EXPECT_EQ(c.traversals, 1);
+      EXPECT_NEAR(*c.confidence, 0.7, 1e-3);
+    }
+    if (c.road_id == b.id) {
+      EXPECT_EQ(c.state, RoadState::kPartial);
+      EXPECT_NEAR(c.mapped_m, std::min(10.0, b.length), 1e-3);
+    }
+  }
+  EXPECT_NEAR(cov.mapped_m, a.length + std::min(10.0, b.length), 1e-3);
+  std::ofstream(dir.str("map.osm")) << "not a map";
+  EXPECT_EQ(cityCoverage(sk, dir.str()).problems.size(), 1u) << "an unreadable whole map is said";
+}
+
 TEST(Coverage, ThePlanIsAConnectedRouteThatCoversMostlyNewRoad) {
   const auto sk = cityOf();
   Store s;

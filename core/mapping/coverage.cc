@@ -298,6 +298,20 @@ CoveragePlan planCoverage(const skeleton::Skeleton& sk, const CityCoverage& cove
     if (path.empty()) break;
     for (const auto* r : path) drive(r);
   }
+  // The time left is shorter than any road that would cover more: the drive ends on the road
+  // leaving here that has the most left to cover, as far as the time goes (a partial road).
+  const double budget = seconds - plan.seconds;
+  const skeleton::AtomicRoad* last = nullptr;
+  p.next(at, prev, [&](const skeleton::AtomicRoad* r) {
+    if (p.gain(r->id) > 0.0 && (!last || p.gain(r->id) > p.gain(last->id))) last = r;
+  });
+  if (last && budget > 0.0) {
+    const double share = std::min(1.0, budget / p.seconds(*last));
+    plan.roads.push_back(last->id);
+    plan.intersections.push_back(last->to);
+    plan.seconds += share * p.seconds(*last);
+    plan.new_m += share * p.gain(last->id);
+  }
   return plan;
 }
 

@@ -44,11 +44,13 @@ struct CityCoverage {
 // length (the quicker path on a tie); where no such path starts, the quickest way to the nearest
 // road left to cover. No U-turns (a driver avoids them; the simulator cannot make them); OSM turn
 // restrictions are not known here: lanemap-sim --route refuses a route that breaks one. A dead
-// end ends the route.
+// end ends the route. When the time left is shorter than every road that would cover more, the
+// route ends on the road leaving its last intersection with the most left to cover, as far as the
+// time goes (its seconds and new_m count that part).
 struct CoveragePlan {
   std::vector<int64_t> roads;          // directed atomic roads in driving order
   std::vector<int64_t> intersections;  // the first road's start, then each road's end (lanemap-sim --route)
-  double seconds = 0.0;                // driving time of the route
+  double seconds = 0.0;                // driving time of the route (at most the time given)
   double new_m = 0.0;                  // unmapped directed length it covers
 };
 CoveragePlan planCoverage(const skeleton::Skeleton& skeleton, const CityCoverage& coverage, int64_t start_intersection,

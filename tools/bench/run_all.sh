@@ -53,6 +53,9 @@ tools/bench/viewer_cpu.sh "$build"
 # Issue 14: drives of one world fused into one map, aligned and not (about 6 minutes).
 echo "== campaign: 3 drives of one West Oakland world fused (tools/bench/campaign.sh)"
 tools/bench/campaign.sh "$build" 3 60 "$out/campaign"
+# Issue 14: the cost of closing one road against the map's size (about 5 minutes: fsynced writes).
+echo "== closing one road, against the store's size (lanemap-bench-store)"
+"$build/bin/lanemap-bench-store"
 # Issue 14: a coverage campaign, each drive planned on what the map covers (about 3 minutes).
 tools/bench/coverage_campaign.sh "$build" 4 60 "$out/coverage-campaign"
 

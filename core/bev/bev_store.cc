@@ -181,17 +181,16 @@ std::filesystem::path checkpointMeta(const std::string& store, int64_t road_id) 
   return checkpointDir(store) / ("road_" + std::to_string(road_id) + ".json");
 }
 
-// The frame count in the header of a stored grid file (BevGrid::save: magic, resolution, tile
-// size, layers, frames): 0 when there is none, -1 when it cannot be read.
+// The frame count in the header of a stored grid file (BevGrid::readHeader): 0 when there is
+// none, -1 when it cannot be read.
 int64_t storedFrames(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) return 0;
-  std::ifstream f(path, std::ios::binary);
-  char header[28];
-  if (!f.read(header, sizeof(header)) || (std::memcmp(header, "LMBEV001", 8) != 0 && std::memcmp(header, "LMBEV002", 8) != 0)) return -1;
-  int32_t frames = 0;
-  std::memcpy(&frames, header + 24, sizeof(frames));
-  return frames;
+  try {
+    return BevGrid::readHeader(path).frames;
+  } catch (const BevError&) {
+    return -1;
+  }
 }
 
 }  // namespace

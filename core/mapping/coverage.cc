@@ -59,6 +59,15 @@ void setLanes(RoadCoverage& c, const std::vector<const map::Lanelet*>& lanelets)
   }
 }
 
+// The city's totals from its roads, and the roads in id order.
+void totalAndSort(CityCoverage& out) {
+  for (const auto& c : out.roads) {
+    out.total_m += c.length_m;
+    out.mapped_m += c.mapped_m;
+  }
+  std::sort(out.roads.begin(), out.roads.end(), [](const RoadCoverage& a, const RoadCoverage& b) { return a.road_id < b.road_id; });
+}
+
 }  // namespace
 
 CityCoverage cityCoverage(const skeleton::Skeleton& sk, const std::string& store) {
@@ -118,11 +127,9 @@ CityCoverage cityCoverage(const skeleton::Skeleton& sk, const std::string& store
     } else if (const auto w = whole_by_road.find(road.id); w != whole_by_road.end()) {
       setLanes(c, w->second);
     }
-    out.total_m += c.length_m;
-    out.mapped_m += c.mapped_m;
     out.roads.push_back(std::move(c));
   }
-  std::sort(out.roads.begin(), out.roads.end(), [](const RoadCoverage& a, const RoadCoverage& b) { return a.road_id < b.road_id; });
+  totalAndSort(out);
   if (!whole_problem.empty()) out.problems.push_back(whole_problem);
   return out;
 }
@@ -181,10 +188,8 @@ struct Planner {
     std::map<int64_t, double> best;                      // road -> quickest time at its end so far
     std::map<int64_t, const skeleton::AtomicRoad*> via;  // road -> the road before it on that way
     std::set<std::pair<double, int64_t>> queue;
-    std::map<int64_t, const skeleton::AtomicRoad*> by_id;
     next(at, prev, [&](const skeleton::AtomicRoad* r) {
       best[r->id] = seconds(*r);
-      by_id[r->id] = r;
       queue.insert({seconds(*r), r->id});
     });
     while (!queue.empty()) {
@@ -192,7 +197,7 @@ struct Planner {
       queue.erase(queue.begin());
       if (t > budget) break;  // the queue is in time order: nothing further is in reach
       if (!done.insert(id).second) continue;
-      const skeleton::AtomicRoad* r = by_id.at(id);
+      const skeleton::AtomicRoad* r = sk.road(id);
       if (gain(r->id) > 0.0) {
         std::vector<const skeleton::AtomicRoad*> path{r};
         for (auto it = via.find(r->id); it != via.end(); it = via.find(it->second->id)) path.push_back(it->second);
@@ -204,7 +209,6 @@ struct Planner {
         if (done.count(n->id) || (best.count(n->id) && best[n->id] <= nt)) return;
         best[n->id] = nt;
         via[n->id] = r;
-        by_id[n->id] = n;
         queue.insert({nt, n->id});
       });
     }
@@ -254,11 +258,9 @@ CityCoverage readCoverageJson(const std::string& path, const skeleton::Skeleton&
     c.to = road.to;
     c.length_m = road.length;
     c.mapped_m = c.state == RoadState::kMapped ? road.length : std::clamp(c.mapped_m, 0.0, road.length);
-    out.total_m += c.length_m;
-    out.mapped_m += c.mapped_m;
     out.roads.push_back(c);
   }
-  std::sort(out.roads.begin(), out.roads.end(), [](const RoadCoverage& a, const RoadCoverage& b) { return a.road_id < b.road_id; });
+  totalAndSort(out);
   return out;
 }
 

@@ -13,12 +13,12 @@
 #include "core/config/map_config.h"
 #include "core/io/lanelet2.h"
 #include "core/osm/osm_data.h"
+#include "tests/common/sim_drive.h"
 #include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <sys/wait.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -248,14 +248,10 @@ TEST(Coverage, TheToolWritesTheFiguresAndNamesWhatItCouldNotRead) {
   const std::string cmd = std::string(LANEMAP_BIN_DIR) + "/lanemap-coverage --store " + s.dir.str() + " --osm " + kOsm +
                           " --map-config " + LANEMAP_SOURCE_DIR + "/config/map.yaml --json " + out + "/c.json --geojson " + out +
                           "/c.geojson --png " + out + "/c.png --plan 150 --from " + std::to_string(sk.road(s.mapped)->from) +
-                          " --gpx " + out + "/plan.gpx 2>&1";
-  FILE* p = ::popen(cmd.c_str(), "r");
-  ASSERT_NE(p, nullptr);
-  std::string text;
-  char buf[4096];
-  for (size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) text.append(buf, n);
-  const int status = ::pclose(p);
-  EXPECT_EQ(WEXITSTATUS(status), 3) << text;
+                          " --gpx " + out + "/plan.gpx";
+  const auto run = lanemap::testing::runCommand(cmd);
+  const std::string& text = run.output;
+  EXPECT_EQ(run.exit_code, 3) << text;
   EXPECT_NE(text.find("road " + std::to_string(s.garbage) + ":"), std::string::npos) << text;
   const CityCoverage cov = cityCoverage(sk, s.dir.str());
   std::ifstream jf(out + "/c.json");

@@ -4,13 +4,12 @@
 // field; the comparison itself (processes/framework/message_json.h) tells a number within the
 // tolerance from one beyond it, a missing field, a new one and a missing message.
 #include "processes/framework/message_json.h"
+#include "tests/common/sim_drive.h"
 #include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <sys/wait.h>
 
-#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -28,15 +27,8 @@ struct ReplayRun {
 };
 
 ReplayRun run(const std::string& args) {
-  ReplayRun r;
-  FILE* p = ::popen((kReplay + " " + args + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  size_t n = 0;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int status = ::pclose(p);
-  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  const auto r = lt::runCommand(kReplay + " " + args);
+  return {r.exit_code, r.output};
 }
 
 std::string readFile(const std::string& path) {

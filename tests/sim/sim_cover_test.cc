@@ -5,14 +5,13 @@
 #include "core/config/map_config.h"
 #include "core/mapping/coverage.h"
 #include "core/osm/osm_data.h"
+#include "tests/common/sim_drive.h"
 #include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <set>
@@ -27,11 +26,11 @@ nlohmann::json readJson(const std::string& path) {
   return nlohmann::json::parse(f);
 }
 
+// Its exit status; stdout and stderr go to `log`.
 int sim(const std::string& args, const std::string& log) {
-  const std::string cmd = std::string(LANEMAP_BIN_DIR) + "/lanemap-sim -q --osm " + kOsm + " --no-lidar --camera-hz 1 " + args + " > " +
-                          log + " 2>&1";
-  const int rc = std::system(cmd.c_str());
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  return lanemap::testing::runCommand(std::string(LANEMAP_BIN_DIR) + "/lanemap-sim -q --osm " + kOsm + " --no-lidar --camera-hz 1 " +
+                                      args + " > " + log)
+      .exit_code;
 }
 
 TEST(SimCover, ASecondDriveFollowsTheCoveragePlanOverRoadsTheFirstDidNotDrive) {

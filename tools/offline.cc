@@ -197,7 +197,7 @@ class OfflineMapper {
     mapPartialRoad();
   }
 
-  const mapping::MapAssembler& assembler() const { return assembler_; }
+  mapping::MapAssembler& assembler() { return assembler_; }
   int roadsMapped() const { return roads_mapped_; }
   int64_t framesSegmented() const { return frames_segmented_; }
   int64_t framesFailed() const { return frames_failed_; }

@@ -10,6 +10,7 @@
 #include <limits>
 #include <set>
 #include <sstream>
+#include <unordered_map>
 
 namespace lanemap::intersections {
 
@@ -587,24 +588,33 @@ IntersectionResult buildIntersection(const skeleton::Skeleton& skeleton, int64_t
   return Builder(skeleton, *it, roads, options, restrictions, base).build();
 }
 
+std::optional<IntersectionResult> buildJoinedIntersection(const skeleton::Skeleton& skeleton, size_t index,
+                                                          const std::map<int64_t, map::LaneMap>& roads,
+                                                          const IntersectionOptions& options,
+                                                          const std::vector<osm::Restriction>& restrictions) {
+  const auto& in = skeleton.intersections().at(index);
+  const auto known = [&](const std::vector<int64_t>& ids) {
+    return std::any_of(ids.begin(), ids.end(), [&](int64_t id) { return roads.count(id) > 0; });
+  };
+  if (!known(in.incoming) || !known(in.outgoing)) return std::nullopt;
+  IntersectionOptions o = options;
+  o.id_base = 0;  // per intersection
+  IntersectionResult r = buildIntersection(skeleton, in.id, roads, o, restrictions);
+  if (r.connections.empty()) return std::nullopt;
+  return r;
+}
+
 std::vector<IntersectionResult> buildIntersections(const skeleton::Skeleton& skeleton,
                                                    const std::map<int64_t, map::LaneMap>& roads,
                                                    const IntersectionOptions& options,
                                                    const std::vector<osm::Restriction>& restrictions,
                                                    std::vector<std::string>* failures) {
   std::vector<IntersectionResult> out;
-  for (const auto& in : skeleton.intersections()) {
-    const auto known = [&](const std::vector<int64_t>& ids) {
-      return std::any_of(ids.begin(), ids.end(), [&](int64_t id) { return roads.count(id) > 0; });
-    };
-    if (!known(in.incoming) || !known(in.outgoing)) continue;
-    IntersectionOptions o = options;
-    o.id_base = 0;  // per intersection
+  for (size_t i = 0; i < skeleton.intersections().size(); ++i) {
     try {
-      IntersectionResult r = buildIntersection(skeleton, in.id, roads, o, restrictions);
-      if (!r.connections.empty()) out.push_back(std::move(r));
+      if (auto r = buildJoinedIntersection(skeleton, i, roads, options, restrictions)) out.push_back(std::move(*r));
     } catch (const std::exception& e) {
-      if (failures) failures->push_back("intersection " + std::to_string(in.id) + ": " + e.what());
+      if (failures) failures->push_back("intersection " + std::to_string(skeleton.intersections()[i].id) + ": " + e.what());
     }
   }
   return out;
@@ -642,6 +652,50 @@ void appendIntersection(map::LaneMap& whole, const IntersectionResult& result) {
         }
         break;
       }
+    }
+  }
+}
+
+void appendIntersections(map::LaneMap& whole, const std::vector<const IntersectionResult*>& results) {
+  // One pass is appendIntersection in order when no fragment shares an id with another (each
+  // has its own id base) and `whole` holds no fragment of these intersections yet; else in order.
+  std::set<int64_t> intersection_ids, fragment_lanelets, fragment_lines;
+  bool disjoint = true;
+  for (const auto* r : results) {
+    disjoint &= intersection_ids.insert(r->intersection_id).second;
+    for (const auto& ll : r->map.lanelets) disjoint &= fragment_lanelets.insert(ll.id).second;
+    for (const auto& l : r->map.lines) disjoint &= fragment_lines.insert(l.id).second;
+  }
+  for (const auto& ll : whole.lanelets) {
+    disjoint &= !(ll.kind == map::LaneletKind::kIntersection && intersection_ids.count(ll.intersection_id));
+  }
+  if (!disjoint) {
+    for (const auto* r : results) appendIntersection(whole, *r);
+    return;
+  }
+  whole.lanelets.erase(std::remove_if(whole.lanelets.begin(), whole.lanelets.end(),
+                                      [&](const map::Lanelet& ll) { return fragment_lanelets.count(ll.id) > 0; }),
+                       whole.lanelets.end());
+  whole.lines.erase(std::remove_if(whole.lines.begin(), whole.lines.end(),
+                                   [&](const map::LineString& l) { return fragment_lines.count(l.id) > 0; }),
+                    whole.lines.end());
+  for (auto& ll : whole.lanelets) {
+    ll.successors.erase(std::remove_if(ll.successors.begin(), ll.successors.end(),
+                                       [&](int64_t s) { return fragment_lanelets.count(s) > 0; }),
+                        ll.successors.end());
+  }
+  for (const auto* r : results) {
+    whole.lines.insert(whole.lines.end(), r->map.lines.begin(), r->map.lines.end());
+    whole.lanelets.insert(whole.lanelets.end(), r->map.lanelets.begin(), r->map.lanelets.end());
+  }
+  std::unordered_map<int64_t, size_t> first_of;  // lanelet id -> its first index
+  for (size_t i = 0; i < whole.lanelets.size(); ++i) first_of.emplace(whole.lanelets[i].id, i);
+  for (const auto* r : results) {
+    for (const auto& c : r->connections) {
+      const auto it = first_of.find(c.in_lanelet);
+      if (it == first_of.end()) continue;
+      auto& successors = whole.lanelets[it->second].successors;
+      if (std::find(successors.begin(), successors.end(), c.lanelet_id) == successors.end()) successors.push_back(c.lanelet_id);
     }
   }
 }

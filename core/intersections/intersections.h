@@ -34,6 +34,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -139,6 +140,15 @@ IntersectionResult buildIntersection(const skeleton::Skeleton& skeleton, int64_t
                                      const IntersectionOptions& options = {},
                                      const std::vector<osm::Restriction>& restrictions = {});
 
+// The intersection at skeleton.intersections()[index] as buildIntersections builds it (ids from
+// its own base): nullopt when it has no incoming or no outgoing road in `roads`, or when it
+// connects nothing. Throws as buildIntersection. An intersection depends on the lanes of its own
+// incoming and outgoing roads only, so one road's new lanes touch the two intersections at its ends.
+std::optional<IntersectionResult> buildJoinedIntersection(const skeleton::Skeleton& skeleton, size_t index,
+                                                          const std::map<int64_t, map::LaneMap>& roads,
+                                                          const IntersectionOptions& options = {},
+                                                          const std::vector<osm::Restriction>& restrictions = {});
+
 // Every intersection with at least one incoming and one outgoing road in `roads`.
 // One intersection whose building throws is left out, named in `failures` when given ("intersection
 // ID: reason"): one junction's trouble never costs the rest of the map.
@@ -153,6 +163,10 @@ std::vector<IntersectionResult> buildIntersections(const skeleton::Skeleton& ske
 // the same intersection (lanelets and lines with the fragment's ids are removed first, and so are
 // the successor links to them).
 void appendIntersection(map::LaneMap& whole, const IntersectionResult& result);
+
+// appendIntersection for each fragment in order, in one pass over `whole` (linear in its size,
+// where calling appendIntersection per fragment is quadratic). Same result.
+void appendIntersections(map::LaneMap& whole, const std::vector<const IntersectionResult*>& results);
 
 // The road lanelets (kind kRoad, road_id >= 0) of a whole map grouped by road id, each with the
 // lines it uses; the input buildIntersection takes, from e.g. the simulator's ground truth.

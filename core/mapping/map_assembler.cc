@@ -7,11 +7,59 @@ namespace lanemap::mapping {
 
 MapAssembler::MapAssembler(const skeleton::Skeleton& skeleton, intersections::IntersectionOptions options,
                            std::vector<osm::Restriction> restrictions)
-    : skeleton_(skeleton), options_(std::move(options)), restrictions_(std::move(restrictions)) {}
+    : skeleton_(skeleton), options_(std::move(options)), restrictions_(std::move(restrictions)) {
+  options_.validate();
+  const auto& all = skeleton_.intersections();
+  for (size_t i = 0; i < all.size(); ++i) index_of_intersection_.emplace(all[i].id, i);
+}
 
-void MapAssembler::setRoad(int64_t road_id, map::LaneMap lanes) { roads_[road_id] = std::move(lanes); }
+void MapAssembler::setRoad(int64_t road_id, map::LaneMap lanes) {
+  roads_[road_id] = std::move(lanes);
+  if (const auto* road = skeleton_.road(road_id)) {
+    for (const int64_t node : {road->from, road->to}) {
+      if (const auto it = index_of_intersection_.find(node); it != index_of_intersection_.end()) marked_.insert(it->second);
+    }
+  }
+}
 
-map::LaneMap MapAssembler::map(std::vector<std::string>* failures) const {
+size_t MapAssembler::update() {
+  const size_t n = marked_.size();
+  for (const size_t i : marked_) {
+    Built b;
+    try {
+      b.result = intersections::buildJoinedIntersection(skeleton_, i, roads_, options_, restrictions_);
+    } catch (const std::exception& e) {
+      b.failure = "intersection " + std::to_string(skeleton_.intersections()[i].id) + ": " + e.what();
+    }
+    if (b.result || !b.failure.empty()) {
+      built_[i] = std::move(b);
+    } else {
+      built_.erase(i);
+    }
+  }
+  marked_.clear();
+  return n;
+}
+
+std::vector<const intersections::IntersectionResult*> MapAssembler::intersections() {
+  update();
+  std::vector<const intersections::IntersectionResult*> out;
+  for (const auto& [i, b] : built_) {
+    if (b.result) out.push_back(&*b.result);
+  }
+  return out;
+}
+
+std::vector<std::string> MapAssembler::failures() {
+  update();
+  std::vector<std::string> out;
+  for (const auto& [i, b] : built_) {
+    if (!b.failure.empty()) out.push_back(b.failure);
+  }
+  return out;
+}
+
+map::LaneMap MapAssembler::map(std::vector<std::string>* failures) {
   map::LaneMap all;
   const auto& o = skeleton_.frame().origin();
   all.origin_lat = o.lat;
@@ -24,8 +72,9 @@ map::LaneMap MapAssembler::map(std::vector<std::string>* failures) const {
     }
     all.lanelets.insert(all.lanelets.end(), m.lanelets.begin(), m.lanelets.end());
   }
-  for (const auto& r : intersections::buildIntersections(skeleton_, roads_, options_, restrictions_, failures)) {
-    intersections::appendIntersection(all, r);
+  intersections::appendIntersections(all, intersections());
+  if (failures) {
+    for (auto& f : this->failures()) failures->push_back(std::move(f));
   }
   return all;
 }

@@ -66,6 +66,7 @@ ViewerState::ViewerState(std::shared_ptr<const skeleton::Skeleton> skeleton, std
     : skeleton_(std::move(skeleton)), restrictions_(std::move(restrictions)),
       intersection_options_(std::move(intersection_options)), options_(options) {
   if (!skeleton_) throw std::invalid_argument("ViewerState: no skeleton");
+  assembler_ = std::make_unique<mapping::MapAssembler>(*skeleton_, intersection_options_, restrictions_);
   const auto& o = skeleton_->frame().origin();
   assembled_.origin_lat = o.lat;
   assembled_.origin_lon = o.lon;
@@ -157,17 +158,15 @@ void ViewerState::setRoadLanes(int64_t road_id, map::LaneMap lanes) {
     lanes.origin_alt = o.alt;
   }
   std::lock_guard<std::mutex> lock(mutex_);
-  const bool had = roads_.count(road_id) > 0;
-  roads_[road_id] = std::move(lanes);
+  const bool had = assembler_->roads().count(road_id) > 0;
+  assembler_->setRoad(road_id, std::move(lanes));
   if (!had && skeleton_->road(road_id)) ++coverage_version_;
   assembleLocked();
   ++version_;
 }
 
 void ViewerState::assembleLocked() {
-  mapping::MapAssembler assembler(*skeleton_, intersection_options_, restrictions_);
-  for (const auto& [id, m] : roads_) assembler.setRoad(id, m);
-  assembled_ = assembler.map();
+  assembled_ = assembler_->map();  // the intersections at the new road's ends rebuilt, the rest kept
   ++map_version_;
 }
 
@@ -220,7 +219,7 @@ nlohmann::json ViewerState::processesLocked(double now_s) const {
 }
 
 Coverage ViewerState::coverageLocked(int64_t road_id) const {
-  if (roads_.count(road_id)) return Coverage::kMapped;
+  if (assembler_->roads().count(road_id)) return Coverage::kMapped;
   if (driven_.count(road_id)) return Coverage::kDriven;
   return Coverage::kNeverDriven;
 }
@@ -268,7 +267,7 @@ nlohmann::json ViewerState::stateValue(double now_s) {
               {"open_road", open_road_},
               {"closed_roads", closed},
               {"bev", bev},
-              {"map", {{"version", map_version_}, {"roads", roads_.size()}, {"road_lanes", road_lanes},
+              {"map", {{"version", map_version_}, {"roads", assembler_->roads().size()}, {"road_lanes", road_lanes},
                        {"connections", connections}, {"lanes_by_road", lanes_by_road}}},
               {"coverage", {{"version", coverage_version_}, {"driven", driven}, {"mapped", mapped}, {"never_driven", never}}},
               {"processes", processesLocked(now_s)}};
@@ -357,7 +356,7 @@ size_t ViewerState::roadLaneCount(int64_t road_id) const {
 
 size_t ViewerState::mappedRoadCount() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return roads_.size();
+  return assembler_->roads().size();
 }
 
 }  // namespace lanemap::viewer

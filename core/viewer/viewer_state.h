@@ -11,6 +11,7 @@
 #include "core/bev/bev_render.h"
 #include "core/intersections/intersections.h"
 #include "core/map/lane_map.h"
+#include "core/mapping/map_assembler.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
 
@@ -131,7 +132,7 @@ class ViewerState {
   std::string skeleton_cache_;
   uint64_t skeleton_cache_version_ = 0;
   // lanes
-  std::map<int64_t, map::LaneMap> roads_;
+  std::unique_ptr<mapping::MapAssembler> assembler_;  // the roads' lanes, intersections kept as built
   map::LaneMap assembled_;
   uint64_t map_version_ = 0;
   std::string lanes_cache_, lanelet2_cache_;

@@ -284,7 +284,20 @@ std::unordered_map<int64_t, bool> laneChangeOfSharedLines(const LaneMap& map) {
   return out;
 }
 
-double speedLimitOf(const map::Lanelet& ll, const LaneMap& map, const Lanelet2WriteOptions& o) {
+// The lanelets by id and each lanelet's predecessors (the lanelets listing it as successor), for
+// lookups in one pass over the map.
+struct LaneletIndex {
+  explicit LaneletIndex(const LaneMap& map) {
+    for (const auto& ll : map.lanelets) {
+      by_id.emplace(ll.id, &ll);
+      for (int64_t s : ll.successors) predecessors[s].push_back(&ll);
+    }
+  }
+  std::unordered_map<int64_t, const map::Lanelet*> by_id;  // the first lanelet of each id
+  std::unordered_map<int64_t, std::vector<const map::Lanelet*>> predecessors;
+};
+
+double speedLimitOf(const map::Lanelet& ll, const LaneletIndex& index, const Lanelet2WriteOptions& o) {
   const auto& by_road = o.speed_limit_kmh_by_road;
   if (const auto it = by_road.find(ll.road_id); ll.road_id >= 0 && it != by_road.end()) return it->second;
   if (ll.kind != LaneletKind::kIntersection || by_road.empty()) return o.default_speed_limit_kmh;
@@ -294,11 +307,11 @@ double speedLimitOf(const map::Lanelet& ll, const LaneMap& map, const Lanelet2Wr
     const auto it = by_road.find(other.road_id);
     if (other.road_id >= 0 && it != by_road.end()) v = std::min(v, it->second);
   };
-  for (const auto& other : map.lanelets) {
-    if (std::find(other.successors.begin(), other.successors.end(), ll.id) != other.successors.end()) consider(other);
+  if (const auto it = index.predecessors.find(ll.id); it != index.predecessors.end()) {
+    for (const auto* other : it->second) consider(*other);
   }
   for (int64_t s : ll.successors) {
-    if (const auto* other = map.lanelet(s)) consider(*other);
+    if (const auto it = index.by_id.find(s); it != index.by_id.end()) consider(*it->second);
   }
   return std::isfinite(v) ? v : o.default_speed_limit_kmh;
 }
@@ -419,6 +432,7 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
 
   nlohmann::ordered_json lanelets_json = nlohmann::ordered_json::object();
   std::string rel_xml;
+  const LaneletIndex lanelet_index(map);
   for (const auto& ll : map.lanelets) {
     const int64_t rel_id = ids.relation_of_lanelet.at(ll.id);
     rel_xml += "  <relation id=\"" + std::to_string(rel_id) + "\" version=\"1\" visible=\"true\">\n";
@@ -442,7 +456,7 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
     appendTag(rel_xml, "subtype", "road");
     appendTag(rel_xml, "location", options.location);
     appendTag(rel_xml, "one_way", "yes");
-    appendTag(rel_xml, "speed_limit", formatSpeed(speedLimitOf(ll, map, options)));
+    appendTag(rel_xml, "speed_limit", formatSpeed(speedLimitOf(ll, lanelet_index, options)));
     TurnDirection turn = ll.turn;
     if (turn == TurnDirection::kNone && ll.kind == LaneletKind::kIntersection) turn = turnFromCentre(ll.centre);
     if (const char* t = turnTag(turn); t && options.turn_direction_tags) appendTag(rel_xml, "turn_direction", t);

@@ -91,6 +91,9 @@ LaneMapperSettings LaneMapperSettings::fromYaml(const config::YamlReader& r) {
   r.read("store", s.store);
   r.read("bev_channel", s.bev_channel);
   positiveQueue(r, "queue_capacity", s.queue_capacity);
+  if (r.read("export_interval_s", s.export_interval_s) && !(s.export_interval_s >= 0.0 && s.export_interval_s <= 86400.0)) {
+    r.fail("export_interval_s", "must be within [0, 86400] seconds");
+  }
   return s;
 }
 LaneMapperSettings LaneMapperSettings::fromYamlFile(const std::string& path) { return loadStrictly<LaneMapperSettings>(path); }

@@ -83,6 +83,11 @@ struct LaneMapperSettings {
   std::string store;
   std::string bev_channel = channels::kBevRoad;
   int queue_capacity = 100;
+  // lane_map.osm (every road and intersection, core/mapping/map_assembler.h): 0 = written after
+  // every road (its cost grows with the store); > 0 = at most once per this many seconds, the
+  // last change always within it, and when the process stops (lanes/road_<id>.osm, written per
+  // road, are the store either way: a restart writes lane_map.osm again from them).
+  double export_interval_s = 0.0;
   // The explorer block with the map block's road frame: what exploreRoad runs with.
   lanes::ExplorerOptions explorerOptions() const { return withRoadFrame(explorer, map.road_frame); }
   static LaneMapperSettings fromYaml(const config::YamlReader& r);

@@ -13,9 +13,16 @@
 // would misread (its bounds against its driving direction) is left out of the road's lanes and
 // said (STATUS lanelets_dropped; core/mapping/road_lanes.h): the rest of the road is mapped.
 //
+// The whole map (core/mapping/map_assembler.h) is kept between roads: a road's lanes rebuild the
+// two intersections at its ends only, whatever the store's size. lane_map.osm, every road and
+// intersection, is written after every road (export_interval_s 0, LANE_MAP after it) or at most
+// once per export_interval_s, the last change always within it and when the process stops
+// (STATUS map_exports, export_ms_max). On start it is written again when a road file is newer.
+//
 // STATUS latency (per road): from the BEV_ROAD message's receive time (lcm::ReceiveBuffer::recv_utime)
 // to its LANE_MAP published: the wait behind other roads, loading the grid, lane exploration and
-// rewriting lane_map.osm. map_road_ms_max: exploring one road and writing its files, the worst road.
+// (export_interval_s 0) rewriting lane_map.osm. map_road_ms_max: exploring one road, writing its
+// file and rebuilding its intersections, the worst road.
 //
 //   lanemap-lane-mapper --config config/lane_mapper.yaml [--osm FILE] [--store DIR]
 #pragma once
@@ -61,9 +68,11 @@ class LaneMapperApp {
  public:
   LaneMapperApp(Process& process, std::unique_ptr<skeleton::Skeleton> sk, lanes::ExplorerOptions options,
                 std::string store, const std::string& channel, int queue,
-                intersections::IntersectionOptions intersection_options, std::vector<osm::Restriction> restrictions)
+                intersections::IntersectionOptions intersection_options, std::vector<osm::Restriction> restrictions,
+                double export_interval_s = 0.0)
       : process_(process), sk_(std::move(sk)), options_(options), store_(std::move(store)),
-        intersection_options_(std::move(intersection_options)), restrictions_(std::move(restrictions)) {
+        export_interval_(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(export_interval_s))) {
+    assembler_ = std::make_unique<mapping::MapAssembler>(*sk_, std::move(intersection_options), std::move(restrictions));
     write_options_.speed_limit_kmh_by_road = io::speedLimitsKmh(*sk_);  // OSM maxspeed
     io::createDirectories((fs::path(store_) / "lanes").string());
     reloadStore();
@@ -73,7 +82,7 @@ class LaneMapperApp {
     sub->setQueueCapacity(queue);
     process_.setIdleCheck([this] {  // process replay: wait for the worker after each input
       std::lock_guard<std::mutex> lock(mutex_);
-      return jobs_.empty() && !busy_;
+      return jobs_.empty() && !busy_ && !export_pending_;
     });
     process_.setState("ready");
   }
@@ -84,6 +93,13 @@ class LaneMapperApp {
     }
     cv_.notify_all();
     worker_.join();
+    if (export_pending_) {  // the last roads' changes (export_interval_s > 0)
+      try {
+        exportWholeMap();
+      } catch (const std::exception& e) {
+        std::cerr << "lane_mapper: writing " << wholeMapFile() << " at exit: " << e.what() << "\n";
+      }
+    }
   }
 
  private:
@@ -102,8 +118,21 @@ class LaneMapperApp {
       Job job;
       {
         std::unique_lock<std::mutex> lock(mutex_);
-        cv_.wait(lock, [this] { return stop_ || !jobs_.empty(); });
+        const auto ready = [this] { return stop_ || !jobs_.empty(); };
+        if (export_pending_) {
+          cv_.wait_until(lock, last_export_ + export_interval_, ready);
+        } else {
+          cv_.wait(lock, ready);
+        }
         if (stop_) return;
+        if (jobs_.empty()) {  // the export interval is over: the changes since are written
+          busy_ = true;
+          lock.unlock();
+          exportOrSay();
+          lock.lock();
+          busy_ = false;
+          continue;
+        }
         job = jobs_.front();
         jobs_.pop_front();
         busy_ = true;
@@ -116,6 +145,7 @@ class LaneMapperApp {
         process_.counters().add("roads_failed");
         std::cerr << "lane_mapper: road " << job.road.road_id << ": " << e.what() << "\n";
       }
+      if (export_pending_ && Clock::now() >= last_export_ + export_interval_) exportOrSay();
       std::lock_guard<std::mutex> lock(mutex_);
       busy_ = false;
     }
@@ -154,48 +184,78 @@ class LaneMapperApp {
     io::writeLanelet2(m, roadFile(job.road_id), write_options_);  // atomic: a crash leaves the old file or the new one
     {
       std::lock_guard<std::mutex> lock(roads_mutex_);
-      roads_[job.road_id] = m;
-      writeWholeMap();
+      assembler_->setRoad(job.road_id, m);
+      assembler_->update();  // the intersections at the road's two ends
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      export_pending_ = true;
     }
     const double map_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     map_road_ms_max_ = std::max(map_road_ms_max_, map_ms);
     process_.counters().set("map_road_ms_max", static_cast<int64_t>(map_road_ms_max_ + 0.5));
     process_.counters().add("roads_mapped");
     process_.counters().add("lanes_found", static_cast<int64_t>(res.lanes.size()));
+    if (export_interval_ == Clock::duration::zero()) exportWholeMap();  // before LANE_MAP: its map_path holds the road
     publish(job.road_id, m, job.utime);
   }
 
   std::string roadFile(int64_t id) const { return (fs::path(store_) / "lanes" / ("road_" + std::to_string(id) + ".osm")).string(); }
   std::string wholeMapFile() const { return (fs::path(store_) / "lane_map.osm").string(); }
 
-  // Roads plus the intersections between them (core/mapping, as the offline runner does).
-  void writeWholeMap() {
-    mapping::MapAssembler assembler(*sk_, intersection_options_, restrictions_);
-    for (const auto& [id, m] : roads_) assembler.setRoad(id, m);
+  // lane_map.osm: the roads plus the intersections between them as kept (core/mapping, as the
+  // offline runner writes them), the OSM junction controls and the crosswalks.
+  void exportWholeMap() {
+    const auto t0 = Clock::now();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      export_pending_ = false;  // a road mapped while this runs sets it again
+      last_export_ = t0;
+    }
+    map::LaneMap all;
     std::vector<std::string> failures;
-    map::LaneMap all = assembler.map(&failures);
-    intersections::addRegulatoryElements(all, *sk_, controls_);  // OSM stop / give way / signals
     std::vector<map::Crosswalk> crosswalks;
-    for (const auto& [id, m] : roads_) crosswalks.insert(crosswalks.end(), m.crosswalks.begin(), m.crosswalks.end());
+    {
+      std::lock_guard<std::mutex> lock(roads_mutex_);
+      all = assembler_->map(&failures);
+      for (const auto& [id, m] : assembler_->roads()) crosswalks.insert(crosswalks.end(), m.crosswalks.begin(), m.crosswalks.end());
+    }
+    intersections::addRegulatoryElements(all, *sk_, controls_);  // OSM stop / give way / signals
     lanes::addCrosswalks(all, std::move(crosswalks));  // both directions of a crossing merged
     for (const auto& f : failures) std::cerr << "lane_mapper: " << f << " failed, the rest is mapped\n";
     process_.counters().set("intersections_failed", static_cast<int64_t>(failures.size()));
     if (!all.lanelets.empty()) io::writeLanelet2(all, wholeMapFile(), write_options_);
+    export_ms_max_ = std::max(export_ms_max_, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    process_.counters().set("export_ms_max", static_cast<int64_t>(export_ms_max_ + 0.5));
+    process_.counters().add("map_exports");
+  }
+  void exportOrSay() {
+    try {
+      exportWholeMap();
+    } catch (const std::exception& e) {
+      process_.counters().add("map_exports_failed");
+      std::cerr << "lane_mapper: writing " << wholeMapFile() << ": " << e.what() << "\n";
+    }
   }
 
   void reloadStore() {
     const auto& o = sk_->frame().origin();
     io::Lanelet2ReadOptions ro;
     ro.origin_alt = o.alt;
+    std::error_code ec;
+    const auto map_time = fs::last_write_time(wholeMapFile(), ec);
+    const bool have_map = !ec;
     for (const auto& [id, path] : bev::roadFiles((fs::path(store_) / "lanes").string(), ".osm")) {
       try {
-        roads_[id] = io::readLanelet2(path, o.lat, o.lon, ro);
+        assembler_->setRoad(id, io::readLanelet2(path, o.lat, o.lon, ro));
         process_.counters().add("roads_loaded");
+        if (!have_map || fs::last_write_time(path, ec) > map_time) export_pending_ = true;  // lane_map.osm lacks it
       } catch (const std::exception& e) {
         std::cerr << "lane_mapper: skipping " << path << ": " << e.what() << "\n";
       }
     }
-    for (const auto& [id, m] : roads_) publish(id, m, nowUtime());
+    assembler_->update();
+    for (const auto& [id, m] : assembler_->roads()) publish(id, m, nowUtime());
   }
 
   // A road whose BEV grid is in the store but whose lanes are missing or older (its BEV_ROAD came
@@ -248,11 +308,14 @@ class LaneMapperApp {
   };
   std::deque<Job> jobs_;
   double map_road_ms_max_ = 0.0;  // worker thread only
+  double export_ms_max_ = 0.0;    // worker thread, then the destructor
   bool stop_ = false;
-  bool busy_ = false;  // the worker is mapping a job (under mutex_)
-  std::map<int64_t, map::LaneMap> roads_;
-  intersections::IntersectionOptions intersection_options_;
-  std::vector<osm::Restriction> restrictions_;
+  bool busy_ = false;  // the worker is mapping a job or exporting (under mutex_)
+  using Clock = std::chrono::steady_clock;
+  Clock::duration export_interval_;
+  Clock::time_point last_export_{};  // under mutex_
+  bool export_pending_ = false;      // roads changed since lane_map.osm was written (under mutex_)
+  std::unique_ptr<mapping::MapAssembler> assembler_;  // every road's lanes, the intersections as built (under roads_mutex_)
   std::unordered_map<int64_t, intersections::ControlNode> controls_;  // set before spin()
 
  public:

@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
     auto sk = std::make_unique<lanemap::skeleton::Skeleton>(lanemap::skeleton::Skeleton::build(osm_data, settings.map.skeleton));
     std::cerr << "lane_mapper: " << sk->roads().size() << " atomic roads from " << osm << ", store " << store << "\n";
     LaneMapperApp app(process, std::move(sk), settings.explorerOptions(), store, settings.bev_channel, settings.queue_capacity,
-                      settings.intersections, osm_data.restrictions);
+                      settings.intersections, osm_data.restrictions, settings.export_interval_s);
     app.setControls(lanemap::intersections::readControlNodes(osm));
     return process.spin();
   } catch (const lanemap::io::StoreInUseError& e) {

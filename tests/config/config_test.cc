@@ -233,6 +233,8 @@ TEST(Config, MistypedValuesAreErrorsNamingFileAndKey) {
   expectError([&] { config::MapConfig::fromYamlFile(f); }, f, "skeleton.junction_merge_radius_m", "must be > 0");
   f = editedCopy(dir, "map.yaml", [](YAML::Node& n) { n["road_frame"]["spacing_m"] = 0.0; });
   expectError([&] { config::MapConfig::fromYamlFile(f); }, f, "road_frame.spacing_m", "must be in (0.05, 5]");
+  f = editedCopy(dir, "lane_mapper.yaml", [](YAML::Node& n) { n["export_interval_s"] = -5.0; });
+  expectError([&] { LaneMapperSettings::fromYamlFile(f); }, f, "export_interval_s", "must be within [0, 86400] seconds");
   f = editedCopy(dir, "viewer.yaml", [](YAML::Node& n) { n["port"] = 70000; });
   expectError([&] { ViewerSettings::fromYamlFile(f); }, f, "port", "must be within [0, 65535]");
   f = editedCopy(dir, "vehicle.yaml", [](YAML::Node& n) { n["camera"]["width"] = "wide"; });

@@ -22,6 +22,9 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
 
 namespace {
 
@@ -246,6 +249,81 @@ TEST(LaneMapperProcess, MapsAPartialRoadAsFarAsDrivenThenComplete) {
   ASSERT_EQ(m.lanelets.size(), 2u);
   for (const auto& l : m.lanelets) EXPECT_FALSE(l.partial.has_value()) << l.id;
   EXPECT_GT(furthest(m), road->s_end - 5.0) << "complete: the lanes reach the end intersection";
+}
+
+// export_interval_s > 0 (a city-sized store, issue 14): every road's file is written when it is
+// mapped, lane_map.osm at most once per interval: here right after the first road, then not
+// again while the process runs (a 600 s interval), and with every road when it stops.
+TEST(LaneMapperProcess, ExportIntervalWritesTheWholeMapAtMostThatOftenAndAtStop) {
+  if (!lanemap::testing::inPrivateNetns()) {
+    ASSERT_EQ(lanemap::testing::rerunInPrivateNetns(), 0);
+    return;
+  }
+  const skeleton::Skeleton sk = skeleton::Skeleton::build(osm::readOsm(kOsm));
+  const skeleton::AtomicRoad* road = straightRoad(sk);
+  ASSERT_NE(road, nullptr);
+  const skeleton::AtomicRoad* back = sk.road(road->reverse_id);
+  ASSERT_NE(back, nullptr);
+  lanemap::testing::TempDir tmp("lane-mapper-export");
+  const std::string store = tmp.str("store");
+  const std::string config = tmp.str("lane_mapper.yaml");
+  {
+    std::ifstream in(kConfig);
+    std::ostringstream text;
+    text << in.rdbuf();
+    std::string yaml = text.str();
+    const std::string key = "export_interval_s: 0 ";
+    const auto at = yaml.find(key);
+    ASSERT_NE(at, std::string::npos) << "config/lane_mapper.yaml has no `" << key << "`";
+    yaml.replace(at, key.size(), "export_interval_s: 600 ");
+    std::ofstream(config) << yaml;
+  }
+  std::vector<std::string> grids;
+  for (const auto* r : {road, back}) {
+    grids.push_back(tmp.str("bev_" + std::to_string(r->id) + ".bin"));
+    lanes::testing::paint(twoByTwo(*r)).save(grids.back());
+  }
+  const std::string url = lanemap::testing::testUdpmUrl(7694);
+  lcm::LCM lcm(url);
+  ASSERT_TRUE(lcm.good());
+  Collector c;
+  lcm.subscribe("LANE_MAP", &Collector::onMap, &c)->setQueueCapacity(100);
+  lcm.subscribe("STATUS", &Collector::onStatus, &c)->setQueueCapacity(100);
+  const auto& o = sk.frame().origin();
+  const std::string whole = store + "/lane_map.osm";
+  const auto publish = [&](const skeleton::AtomicRoad& r, const std::string& grid) {
+    bev_road_t msg{};
+    msg.road_id = r.id;
+    msg.from_node = r.from;
+    msg.to_node = r.to;
+    msg.path = grid;
+    msg.resolution_m = 0.1;
+    lcm.publish("BEV_ROAD", &msg);
+  };
+  {
+    lanemap::testing::ChildProcess proc({kBinary, "--config", config, "--osm", kOsm, "--store", store, "--lcm-url", url});
+    ASSERT_TRUE(proc.started());
+    ASSERT_TRUE(waitFor(lcm, [&] { return !c.status.empty(); }, 20)) << "no STATUS from lanemap-lane-mapper";
+    publish(*road, grids[0]);
+    ASSERT_TRUE(waitFor(lcm, [&] { return statusCounter(c.status.back(), "map_exports") == 1; }, 30));
+    EXPECT_EQ(io::readLanelet2(whole, o.lat, o.lon).lanelets.size(), 2u);  // the first road's two lanes
+    publish(*back, grids[1]);
+    publish(*road, grids[0]);  // driven again
+    ASSERT_TRUE(waitFor(lcm, [&] { return statusCounter(c.status.back(), "roads_mapped") == 3; }, 60));
+    ASSERT_TRUE(waitFor(lcm, [&] { return c.maps.size() == 3; }, 5));
+    EXPECT_EQ(statusCounter(c.status.back(), "map_exports"), 1) << "lane_map.osm written again within the interval";
+    EXPECT_TRUE(fs::exists(store + "/lanes/road_" + std::to_string(back->id) + ".osm"));
+    EXPECT_EQ(io::readLanelet2(whole, o.lat, o.lon).lanelets.size(), 2u);
+    EXPECT_GE(proc.stop(), 0);
+  }
+  // Stopped: the whole map holds both directions.
+  const auto m = io::readLanelet2(whole, o.lat, o.lon);
+  std::map<int64_t, int> lanes_of;
+  for (const auto& ll : m.lanelets) {
+    if (ll.kind == map::LaneletKind::kRoad) ++lanes_of[ll.road_id];
+  }
+  EXPECT_EQ(lanes_of[road->id], 2);
+  EXPECT_EQ(lanes_of[back->id], 2);
 }
 
 TEST(LaneMapperProcess, FailsClearlyWithoutAnOsmFile) {

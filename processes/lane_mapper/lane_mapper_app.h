@@ -73,6 +73,7 @@ class LaneMapperApp {
       : process_(process), sk_(std::move(sk)), options_(options), store_(std::move(store)),
         export_interval_(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(export_interval_s))) {
     assembler_ = std::make_unique<mapping::MapAssembler>(*sk_, std::move(intersection_options), std::move(restrictions));
+    last_export_ = Clock::now() - export_interval_;  // the first export is due at once (not one interval after boot)
     write_options_.speed_limit_kmh_by_road = io::speedLimitsKmh(*sk_);  // OSM maxspeed
     io::createDirectories((fs::path(store_) / "lanes").string());
     reloadStore();
@@ -313,7 +314,7 @@ class LaneMapperApp {
   bool busy_ = false;  // the worker is mapping a job or exporting (under mutex_)
   using Clock = std::chrono::steady_clock;
   Clock::duration export_interval_;
-  Clock::time_point last_export_{};  // under mutex_
+  Clock::time_point last_export_;  // under mutex_
   bool export_pending_ = false;      // roads changed since lane_map.osm was written (under mutex_)
   std::unique_ptr<mapping::MapAssembler> assembler_;  // every road's lanes, the intersections as built (under roads_mutex_)
   std::unordered_map<int64_t, intersections::ControlNode> controls_;  // set before spin()

@@ -620,6 +620,25 @@ std::vector<IntersectionResult> buildIntersections(const skeleton::Skeleton& ske
   return out;
 }
 
+namespace {
+
+// Drops these lanelets and lines from `whole`, and every successor link to those lanelets.
+void removeLaneletsAndLines(map::LaneMap& whole, const std::set<int64_t>& lanelets, const std::set<int64_t>& lines) {
+  whole.lanelets.erase(std::remove_if(whole.lanelets.begin(), whole.lanelets.end(),
+                                      [&](const map::Lanelet& ll) { return lanelets.count(ll.id) > 0; }),
+                       whole.lanelets.end());
+  whole.lines.erase(std::remove_if(whole.lines.begin(), whole.lines.end(),
+                                   [&](const map::LineString& l) { return lines.count(l.id) > 0; }),
+                    whole.lines.end());
+  for (auto& ll : whole.lanelets) {
+    ll.successors.erase(std::remove_if(ll.successors.begin(), ll.successors.end(),
+                                       [&](int64_t s) { return lanelets.count(s) > 0; }),
+                        ll.successors.end());
+  }
+}
+
+}  // namespace
+
 void appendIntersection(map::LaneMap& whole, const IntersectionResult& result) {
   std::set<int64_t> old_lanelets, old_lines;
   for (const auto& ll : whole.lanelets) {
@@ -631,17 +650,7 @@ void appendIntersection(map::LaneMap& whole, const IntersectionResult& result) {
   }
   for (const auto& ll : result.map.lanelets) old_lanelets.insert(ll.id);
   for (const auto& l : result.map.lines) old_lines.insert(l.id);
-  whole.lanelets.erase(std::remove_if(whole.lanelets.begin(), whole.lanelets.end(),
-                                      [&](const map::Lanelet& ll) { return old_lanelets.count(ll.id) > 0; }),
-                       whole.lanelets.end());
-  whole.lines.erase(std::remove_if(whole.lines.begin(), whole.lines.end(),
-                                   [&](const map::LineString& l) { return old_lines.count(l.id) > 0; }),
-                    whole.lines.end());
-  for (auto& ll : whole.lanelets) {
-    ll.successors.erase(std::remove_if(ll.successors.begin(), ll.successors.end(),
-                                       [&](int64_t s) { return old_lanelets.count(s) > 0; }),
-                        ll.successors.end());
-  }
+  removeLaneletsAndLines(whole, old_lanelets, old_lines);
   whole.lines.insert(whole.lines.end(), result.map.lines.begin(), result.map.lines.end());
   whole.lanelets.insert(whole.lanelets.end(), result.map.lanelets.begin(), result.map.lanelets.end());
   for (const auto& c : result.connections) {
@@ -673,17 +682,7 @@ void appendIntersections(map::LaneMap& whole, const std::vector<const Intersecti
     for (const auto* r : results) appendIntersection(whole, *r);
     return;
   }
-  whole.lanelets.erase(std::remove_if(whole.lanelets.begin(), whole.lanelets.end(),
-                                      [&](const map::Lanelet& ll) { return fragment_lanelets.count(ll.id) > 0; }),
-                       whole.lanelets.end());
-  whole.lines.erase(std::remove_if(whole.lines.begin(), whole.lines.end(),
-                                   [&](const map::LineString& l) { return fragment_lines.count(l.id) > 0; }),
-                    whole.lines.end());
-  for (auto& ll : whole.lanelets) {
-    ll.successors.erase(std::remove_if(ll.successors.begin(), ll.successors.end(),
-                                       [&](int64_t s) { return fragment_lanelets.count(s) > 0; }),
-                        ll.successors.end());
-  }
+  removeLaneletsAndLines(whole, fragment_lanelets, fragment_lines);
   for (const auto* r : results) {
     whole.lines.insert(whole.lines.end(), r->map.lines.begin(), r->map.lines.end());
     whole.lanelets.insert(whole.lanelets.end(), r->map.lanelets.begin(), r->map.lanelets.end());

@@ -77,6 +77,17 @@ lanes::testing::Layout twoByTwo(const skeleton::AtomicRoad& r) {
   return L;
 }
 
+// The BEV_ROAD the BEV builder sends when it closes `r` with its grid at `path`.
+bev_road_t bevRoad(const skeleton::AtomicRoad& r, const std::string& path) {
+  bev_road_t msg{};
+  msg.road_id = r.id;
+  msg.from_node = r.from;
+  msg.to_node = r.to;
+  msg.path = path;
+  msg.resolution_m = 0.1;
+  return msg;
+}
+
 bool waitFor(lcm::LCM& lcm, const std::function<bool()>& done, int seconds) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
   while (!done() && std::chrono::steady_clock::now() < deadline) lcm.handleTimeout(100);
@@ -113,13 +124,8 @@ TEST(LaneMapperProcess, MapsARoadStoresItAndReloadsAfterRestart) {
     bad.road_id = road->id;
     bad.path = tmp.str("missing.bin");
     lcm.publish("BEV_ROAD", &bad);
-    bev_road_t msg{};
+    bev_road_t msg = bevRoad(*road, grid_path);
     msg.utime = 42;
-    msg.road_id = road->id;
-    msg.from_node = road->from;
-    msg.to_node = road->to;
-    msg.path = grid_path;
-    msg.resolution_m = 0.1;
     lcm.publish("BEV_ROAD", &msg);
     ASSERT_TRUE(waitFor(lcm, [&] { return !c.maps.empty(); }, 30)) << "no LANE_MAP";
     ASSERT_TRUE(waitFor(lcm, [&] { return statusCounter(c.status.back(), "roads_mapped") == 1; }, 5));
@@ -292,12 +298,7 @@ TEST(LaneMapperProcess, ExportIntervalWritesTheWholeMapAtMostThatOftenAndAtStop)
   const auto& o = sk.frame().origin();
   const std::string whole = store + "/lane_map.osm";
   const auto publish = [&](const skeleton::AtomicRoad& r, const std::string& grid) {
-    bev_road_t msg{};
-    msg.road_id = r.id;
-    msg.from_node = r.from;
-    msg.to_node = r.to;
-    msg.path = grid;
-    msg.resolution_m = 0.1;
+    const bev_road_t msg = bevRoad(r, grid);
     lcm.publish("BEV_ROAD", &msg);
   };
   {

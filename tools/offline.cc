@@ -1,7 +1,9 @@
 // lanemap-offline: maps a recorded drive without LCM networking. Reads the log directly and runs
 // the same core stages as the live graph (road tracker -> BEV builder -> lane exploration ->
 // intersections -> map assembly) in one process, as fast as the CPU allows. Deterministic: the LIDAR meshes are built in
-// this thread (the live bev_builder builds them in a worker and may use an older one).
+// a worker thread that never drops a sweep (the live bev_builder drops the oldest when it falls
+// behind), and each frame's mesh is chosen by time, so the map does not depend on the CPU's load;
+// --mesh-in-main-thread builds them in this thread (one core, the same map).
 //
 //   lanemap-offline --log drive.lcmlog --osm roads.osm --out DIR
 //       [--oracle | --semantic-channel CHANNEL] [--model FILE.onnx] [--no-lidar]
@@ -97,7 +99,7 @@ struct Options {
   std::string tracker_config = "config/road_tracker.yaml";
   std::string intersections_config;  // "": the lanes config's `intersections:` (as the lane mapper)
   std::string map_config;            // "": the lanes config's `map:` (as the lane mapper)
-  bool no_lidar = false, quiet = false;
+  bool no_lidar = false, quiet = false, mesh_in_main_thread = false;
 };
 
 // What the live processes read from the same files, through the same functions
@@ -212,7 +214,10 @@ class OfflineMapper {
  private:
   static bev::BevBuilderOptions bevOptions(const Options& o, const OfflineConfig& c) {
     bev::BevBuilderOptions b = c.bev.options;
-    b.async_mesh = false;  // deterministic
+    // Meshes on a second core; the caller waits for the worker rather than drop a sweep, and a
+    // frame's mesh is chosen by time: the same map as building them in this thread (tested).
+    b.async_mesh = !o.mesh_in_main_thread;
+    b.offline_pipeline = true;
     b.use_lidar = b.use_lidar && !o.no_lidar;
     if (b.use_lidar) b.lidar_to_vehicle = c.vehicle.lidarToVehicle();
     return b;
@@ -403,6 +408,8 @@ int main(int argc, char** argv) {
   app.add_option("--segmenter-config", o.segmenter_config, "segmentation model config (its model block)")->capture_default_str();
   app.add_option("--model", o.model, "ONNX model, instead of the segmenter config's model.path");
   app.add_flag("--no-lidar", o.no_lidar, "project on the flat plane only");
+  app.add_flag("--mesh-in-main-thread", o.mesh_in_main_thread,
+               "build the LIDAR meshes in the main thread (one core; the same map, slower)");
   app.add_option("--autoware", o.autoware,
                  "also write the map in Autoware's layout into this folder (lanelet2_map.osm with turn_direction and "
                  "stop-line road_marking elements, map_projector_info.yaml)");

@@ -145,6 +145,7 @@ void BevBuilder::addPose(const TimedPose& pose) {
       // The time went back (a log restarted): roads already closing are complete and handed
       // over; frames and the sweep waiting for a pose of the old time never get one.
       ++stats_.pose_time_jumps;
+      projectDecided(true);  // the frames decided in the old time go in, as if projected at once
       finishCloses(true);
       stats_.frames_time_jump += static_cast<int64_t>(pending_.size());
       pending_.clear();
@@ -152,6 +153,7 @@ void BevBuilder::addPose(const TimedPose& pose) {
       pending_sweep_.reset();
       poses_.clear();
       last_frame_utime_ = std::numeric_limits<int64_t>::min();
+      newest_decided_utime_ = std::numeric_limits<int64_t>::min();
       break;
   }
   if (!poses_.add(pose)) {  // finite but a zero quaternion
@@ -197,29 +199,53 @@ void BevBuilder::addFrame(int64_t utime, const cv::Mat& labels) {
 }
 
 // Projects the waiting frames whose pose is known, oldest first; stops at the first that needs a
-// later pose.
+// later pose or message. First each frame's mesh is decided, in order and once (nearestDecodedSweep),
+// as far as the frames can be; then the frames are projected. When a frame's mesh is still in the
+// worker the caller waits for it (live: a few ms, so that a frame is never left waiting after the
+// last message) or, with offline_pipeline, leaves it for a later message (a road closing first
+// waits for the frames decided before it, finishCloses): the decisions, taken message by message,
+// and what goes into each road are the same either way.
 void BevBuilder::drainFrames() {
+  decideMeshes();
+  projectDecided(!options_.offline_pipeline);
+}
+
+void BevBuilder::decideMeshes() {
+  for (auto& f : pending_) {
+    if (f.mesh_decided) continue;
+    Eigen::Isometry3d pose;
+    const auto r = poses_.lookup(f.utime, &pose, finishing_);
+    if (r == PoseBuffer::Lookup::kTooNew || r == PoseBuffer::Lookup::kEmpty) break;
+    if (r != PoseBuffer::Lookup::kOk) continue;  // never projected: counted by projectDecided
+    const auto wait = meshWait(f.utime);
+    if (wait == MeshWait::kSweepNeedsPoses) break;  // the next pose decodes it
+    if (wait == MeshWait::kSweepToCome) {
+      if (static_cast<double>(poses_.newest() - f.utime) < options_.mesh_wait_s * 1e6) break;
+      ++stats_.frames_mesh_wait_expired;
+    }
+    f.mesh_decided = true;
+    f.mesh_utime = nearestDecodedSweep(f.utime);
+    newest_decided_utime_ = f.utime;
+  }
+}
+
+void BevBuilder::projectDecided(bool wait_for_worker) {
   while (!pending_.empty()) {
-    const PendingFrame& f = pending_.front();
+    PendingFrame& f = pending_.front();
     Eigen::Isometry3d pose;
     const auto r = poses_.lookup(f.utime, &pose, finishing_);
     if (r == PoseBuffer::Lookup::kTooNew || r == PoseBuffer::Lookup::kEmpty) return;
     if (r == PoseBuffer::Lookup::kOk) {
-      const int64_t utime = f.utime;
-      switch (meshWait(utime)) {
-        case MeshWait::kNo: break;
-        case MeshWait::kSweepNeedsPoses: return;  // the next pose decodes it
-        case MeshWait::kMeshInWorker:
-          // Releases mutex_ while the worker finishes (it publishes under mutex_), then looks again.
-          cv_.wait(mutex_, [&] { return stop_ || meshWait(utime) != MeshWait::kMeshInWorker; });
-          if (stop_) return;
-          continue;
-        case MeshWait::kSweepToCome:
-          if (static_cast<double>(poses_.newest() - f.utime) < options_.mesh_wait_s * 1e6) return;
-          ++stats_.frames_mesh_wait_expired;
-          break;
+      if (!f.mesh_decided) return;
+      if (f.mesh_utime != 0 && inWorker(f.mesh_utime)) {
+        if (!wait_for_worker) return;  // a later message (or finish) projects it
+        // Releases mutex_ while the worker finishes (it publishes under mutex_), then looks again.
+        const int64_t target = f.mesh_utime;
+        cv_.wait(mutex_, [&] { return stop_ || !inWorker(target); });
+        if (stop_) return;
+        continue;
       }
-      project(f.utime, f.labels, pose);
+      project(f.utime, f.labels, pose, f.mesh_utime);
     } else if (r == PoseBuffer::Lookup::kTooOld) {
       ++stats_.frames_late;
     } else {
@@ -232,32 +258,51 @@ void BevBuilder::drainFrames() {
 BevBuilder::MeshWait BevBuilder::meshWait(int64_t utime) const {
   if (!options_.use_lidar || finishing_ || newest_sweep_end_ == 0) return MeshWait::kNo;
   if (newest_sweep_end_ < utime - 1000000) return MeshWait::kNo;  // no sweep for a second: no LIDAR now
-  // Only a sweep that may be nearer than the nearest finished mesh is worth waiting for.
-  double best = options_.max_mesh_age_s * 1e6;
-  for (const auto& m : meshes_) best = std::min(best, std::abs(static_cast<double>(m->utime - utime)));
+  // Only a sweep that may be nearer than the nearest decoded one is worth waiting for.
+  const int64_t nearest = nearestDecodedSweep(utime);
+  const double best =
+      nearest != 0 ? std::abs(static_cast<double>(nearest - utime)) : options_.max_mesh_age_s * 1e6;
   auto near = [&](int64_t mid) { return std::abs(static_cast<double>(mid - utime)) < best; };
   // A sweep waiting for its poses is decoded as soon as the poses pass its last packet.
   if (pending_sweep_ && near(pending_sweep_->packet_utime.front() +
                              (pending_sweep_->packet_utime.back() - pending_sweep_->packet_utime.front()) / 2)) {
     return MeshWait::kSweepNeedsPoses;
   }
-  for (const auto& w : work_) {
-    if (near(w.utime_mid)) return MeshWait::kMeshInWorker;
-  }
-  if (working_ && near(working_utime_)) return MeshWait::kMeshInWorker;
   return newest_sweep_end_ + 5000 < utime ? MeshWait::kSweepToCome : MeshWait::kNo;
 }
 
-void BevBuilder::project(int64_t utime, const cv::Mat& labels, const Eigen::Isometry3d& pose) {
-  const auto t0 = std::chrono::steady_clock::now();
-  // The mesh of the sweep nearest in time (the earlier on a tie), within max_mesh_age_s.
-  std::shared_ptr<const ground::SweepGround> mesh;
+int64_t BevBuilder::nearestDecodedSweep(int64_t utime) const {
+  int64_t target = 0;
   double best = options_.max_mesh_age_s * 1e6;
-  for (const auto& m : meshes_) {
-    const double d = std::abs(static_cast<double>(m->utime - utime));
-    if (m->mesh && (d < best || (!mesh && d <= best))) {
+  auto consider = [&](int64_t mid) {
+    const double d = std::abs(static_cast<double>(mid - utime));
+    if (d < best || (d == best && (target == 0 || mid < target))) {
       best = d;
-      mesh = m;
+      target = mid;
+    }
+  };
+  for (const auto& m : meshes_) {
+    if (m->mesh) consider(m->utime);
+  }
+  if (working_) consider(working_utime_);
+  for (const auto& w : work_) consider(w.utime_mid);
+  return target;
+}
+
+bool BevBuilder::inWorker(int64_t sweep_utime) const {
+  if (working_ && working_utime_ == sweep_utime) return true;
+  for (const auto& w : work_) {
+    if (w.utime_mid == sweep_utime) return true;
+  }
+  return false;
+}
+
+void BevBuilder::project(int64_t utime, const cv::Mat& labels, const Eigen::Isometry3d& pose, int64_t mesh_utime) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::shared_ptr<const ground::SweepGround> mesh;
+  if (mesh_utime != 0) {
+    for (const auto& m : meshes_) {
+      if (m->utime == mesh_utime && m->mesh) mesh = m;
     }
   }
   const bool use_mesh = mesh != nullptr;
@@ -306,7 +351,12 @@ void BevBuilder::tryPendingSweep() {
     buildMesh(*points);
     return;
   }
-  if (work_.size() >= 4) {
+  if (work_.size() >= kMaxQueuedSweeps && options_.offline_pipeline) {
+    // Releases mutex_ while the worker catches up (it publishes under mutex_).
+    cv_.wait(mutex_, [this] { return stop_ || work_.size() < kMaxQueuedSweeps; });
+    if (stop_) return;
+  }
+  if (work_.size() >= kMaxQueuedSweeps) {
     work_.pop_front();
     ++stats_.sweeps_replaced;
   }
@@ -361,7 +411,11 @@ void BevBuilder::roadEntered(int64_t road_id, int64_t utime) {
     if (id != road_id && !closing_.count(id) && accumulator_.discard(id)) ++stats_.roads_discarded;
   }
   if (accumulator_.active(road_id)) return;
-  if (accumulator_.open(road_id, utime)) {
+  // The replay counts the frames decided but still waiting for the worker (offline_pipeline) as
+  // added: the road gets the frames it would get had each been projected at its decision.
+  const auto newest = newest_decided_utime_ != std::numeric_limits<int64_t>::min() ? std::optional<int64_t>(newest_decided_utime_)
+                                                                                 : std::nullopt;
+  if (accumulator_.open(road_id, utime, newest)) {
     ++stats_.roads_opened;
   } else {
     ++stats_.events_unknown_road;
@@ -394,10 +448,15 @@ void BevBuilder::roadsAbandoned(int64_t) {
 
 // Hands over the closing roads whose delay has passed (all of them at the end of the input).
 void BevBuilder::finishCloses(bool all) {
+  auto due = [&](int64_t event_utime) {
+    return all || static_cast<double>(poses_.newest()) - static_cast<double>(event_utime) >= options_.close_delay_s * 1e6;
+  };
+  // The frames decided so far go into the road before it closes, as when each is projected at its
+  // decision (offline_pipeline leaves some for the worker).
+  if (std::any_of(closing_.begin(), closing_.end(), [&](const auto& c) { return due(c.second); })) projectDecided(true);
   for (auto it = closing_.begin(); it != closing_.end();) {
-    const bool due = all || static_cast<double>(poses_.newest()) - static_cast<double>(it->second) >= options_.close_delay_s * 1e6;
     const bool frames_waiting = !all && !pending_.empty() && pending_.front().utime <= it->second;
-    if (!due || frames_waiting) {
+    if (!due(it->second) || frames_waiting) {
       ++it;
       continue;
     }

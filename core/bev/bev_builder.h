@@ -13,7 +13,8 @@
 //   tens of ms) is built either in the caller's thread (async_mesh = false: deterministic, tests)
 //   or in a worker thread (async_mesh = true, the process): the LCM thread then never waits for a
 //   mesh; sweeps queue for the worker in order (at most 4 waiting; beyond, the oldest is dropped,
-//   counted as sweeps_replaced).
+//   counted as sweeps_replaced; with offline_pipeline the caller waits instead: lanemap-offline,
+//   whose reading and projecting then overlap the meshes on a second core).
 // - Which mesh a frame uses is decided by time, not by what happens to be finished: the mesh of the
 //   sweep whose middle is nearest to the frame's time, if within max_mesh_age_s (the mesh is in
 //   ENU and the world is static, so a neighbouring sweep's mesh covers what the camera sees); else
@@ -24,10 +25,15 @@
 //   poses are mesh_wait_s past the frame (counted: frames_mesh_wait_expired; a LIDAR that stalls);
 //   there is none when no sweep has come for a second (no LIDAR) or at finish(); a frame at most
 //   5 ms past the newest sweep's end counts as covered (the gap between two sweeps: the next one
-//   could be nearer by those ms only). When the sweep a frame waits for is in the worker, the
-//   caller's thread waits for the worker (one mesh, a few ms) rather than leave the frame for a
-//   later message that may not come. It costs the live graph up to one sweep (0.1 s) after the
-//   frame's time plus a mesh, less the segmenter's own latency, which usually covers it.
+//   could be nearer by those ms only). The choice is made once per frame, in frame order, as soon
+//   as it can be: the nearest decoded sweep, its mesh finished or still in the worker. When it is
+//   still in the worker, the caller's thread waits for the worker (one mesh, a few ms) rather than
+//   leave the frame for a later message that may not come. It costs the live graph up to one sweep
+//   (0.1 s) after the frame's time plus a mesh, less the segmenter's own latency, which usually
+//   covers it. With offline_pipeline (lanemap-offline) the frame is left for a later message
+//   instead; a road that closes first takes the frames decided before it, and a road that opens
+//   replays the history as of the newest decided frame, so every road gets the frames it gets when
+//   each frame is projected at its decision: the same grids, byte for byte.
 // - Roads: ROAD_EVENT "entered" opens a RoadBev (road_bev.h); "reached intersection" closes it
 //   once the poses are close_delay_s past the event (frames still waiting for their pose then go in
 //   first), and the grid is handed over through takeClosed(). "Left map" / "pose lost" discard the
@@ -49,6 +55,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -61,12 +68,21 @@ namespace lanemap::config { class YamlReader; }
 
 namespace lanemap::bev {
 
+inline constexpr size_t kMaxQueuedSweeps = 4;  // sweeps waiting for the mesh worker
+
 struct BevBuilderOptions {
   ProjectorOptions projector;
   AccumulatorOptions accumulator;
   ground::SweepGroundOptions ground;
   bool use_lidar = true;           // false: flat ground only
   bool async_mesh = true;          // build meshes in a worker thread
+  // With async_mesh, for a reader that can wait (lanemap-offline): true: when kMaxQueuedSweeps
+  // sweeps already wait for the worker the caller waits too, instead of dropping the oldest
+  // (sweeps_replaced), and a frame whose mesh is still in the worker stays pending instead of the
+  // caller waiting for it (a later message projects it; finish() waits). So the reader goes on
+  // decoding and projecting while the worker meshes, nothing is lost, and as a frame's mesh is
+  // chosen by time the map is the one of async_mesh = false (tested). false: the live process.
+  bool offline_pipeline = false;
   double max_mesh_age_s = 0.5;     // a frame uses a mesh at most this far from its time
   double mesh_wait_s = 0.3;        // a frame waits at most this long (pose time) for its nearest mesh
   double mesh_history_s = 2.0;     // finished meshes kept for late frames
@@ -163,15 +179,24 @@ class BevBuilder {
   struct PendingFrame {
     int64_t utime;
     cv::Mat labels;
+    bool mesh_decided = false;  // mesh_utime is its mesh's sweep (0: the flat plane)
+    int64_t mesh_utime = 0;
   };
   void drainFrames();
-  // Whether a frame at utime must still wait for a mesh nearer its time (see the header comment):
-  // no; the sweep covering it is still to come (waits at most mesh_wait_s); a sweep near it waits
-  // for its poses (the next pose decodes it); a sweep near it is in the worker (the caller waits
-  // for the worker: a few ms, so that a frame is never left waiting after the last message).
-  enum class MeshWait { kNo, kSweepToCome, kSweepNeedsPoses, kMeshInWorker };
+  void decideMeshes();                         // each waiting frame's mesh, in order, as far as known
+  void projectDecided(bool wait_for_worker);   // the decided frames at the front of the queue
+  // Whether a frame at utime must still wait before its mesh can be decided (see the header
+  // comment): no (every sweep that may be nearest is decoded); the sweep covering it is still to
+  // come (waits at most mesh_wait_s); a sweep near it waits for its poses (the next pose decodes
+  // it). A decoded sweep counts whether its mesh is finished or still in the worker: the decision
+  // does not depend on the worker's progress, only on the messages so far.
+  enum class MeshWait { kNo, kSweepToCome, kSweepNeedsPoses };
   MeshWait meshWait(int64_t utime) const;
-  void project(int64_t utime, const cv::Mat& labels, const Eigen::Isometry3d& pose);
+  // The decoded sweep (finished, in the worker or queued) nearest to utime within max_mesh_age_s,
+  // the earlier on a tie; 0: none.
+  int64_t nearestDecodedSweep(int64_t utime) const;
+  bool inWorker(int64_t sweep_utime) const;  // queued for or being meshed by the worker
+  void project(int64_t utime, const cv::Mat& labels, const Eigen::Isometry3d& pose, int64_t mesh_utime);
   void tryPendingSweep();
   void buildMesh(const ground::SweepPoints& points);
   void workerLoop();
@@ -198,6 +223,7 @@ class BevBuilder {
   BevBuilderStats stats_;
   std::deque<std::shared_ptr<const ground::SweepGround>> meshes_;  // finished, oldest first
   std::deque<ground::SweepPoints> work_;                          // waiting for the worker
+  int64_t newest_decided_utime_ = std::numeric_limits<int64_t>::min();  // frame whose mesh was decided last
   int64_t working_utime_ = 0;                                     // middle of the sweep in the worker
   bool working_ = false, stop_ = false;
   std::thread worker_;

@@ -114,13 +114,17 @@ void RoadBev::add(const FrameSplat& splat) {
 RoadBevAccumulator::RoadBevAccumulator(const skeleton::Skeleton& skeleton, AccumulatorOptions options)
     : skeleton_(skeleton), options_(options) {}
 
-bool RoadBevAccumulator::open(int64_t road_id, int64_t utime) {
+bool RoadBevAccumulator::open(int64_t road_id, int64_t utime, std::optional<int64_t> newest_frame_utime) {
   const auto* road = skeleton_.road(road_id);
   if (!road || active_.count(road_id)) return false;
   RoadBev r{road_id, road->from, road->to, utime, 0,
             std::make_shared<const Corridor>(Corridor::forRoad(skeleton_, *road, options_.corridor)),
             BevGrid(options_.grid)};
-  for (const auto& s : history_) r.add(*s);
+  for (const auto& s : history_) {
+    // The same test as add()'s pruning, from the newest frame time.
+    if (newest_frame_utime && static_cast<double>(*newest_frame_utime - s->utime) > options_.history_s * 1e6) continue;
+    r.add(*s);
+  }
   active_.emplace(road_id, std::move(r));
   return true;
 }

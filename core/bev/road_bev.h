@@ -83,7 +83,10 @@ class RoadBevAccumulator {
 
   // Starts a road (replaying the history into it). Returns false for an unknown road or one already
   // active.
-  bool open(int64_t road_id, int64_t utime);
+  // newest_frame_utime: the replayed splats are those within history_s of this frame time
+  // (default: of the newest splat added; a caller that has decided on frames it has not added
+  // yet passes the newest of those, so that the replay is the same as if they had been added).
+  bool open(int64_t road_id, int64_t utime, std::optional<int64_t> newest_frame_utime = std::nullopt);
   // Makes a road active again with the grid it had (a checkpoint read after a restart); false for
   // an unknown road, one already active, or a grid of another resolution or tile size.
   bool restore(int64_t road_id, BevGrid grid, int64_t utime);

@@ -77,6 +77,7 @@
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <set>
 #include <nlohmann/json.hpp>
 
 namespace fs = std::filesystem;
@@ -153,12 +154,18 @@ class OfflineMapper {
     const auto s = builder_->stats();
     frames_projected_ += s.frames_projected;
     frames_mesh_ += s.frames_mesh;
-    for (auto& [id, grid] : drive_grids_) {
-      auto f = fused_.find(id);
-      prior_[id] = f != fused_.end() ? std::move(f->second) : std::move(grid);
+    // Every road this drive closed: its saved file is now the earlier drives' evidence.
+    for (int64_t id : fused_) {
+      prior_.erase(id);
+      prior_saved_.insert(id);
+      ++traversals_[id];
+    }
+    for (int64_t id : drive_saved_) {
+      prior_saved_.insert(id);
       ++traversals_[id];
     }
     drive_grids_.clear();
+    drive_saved_.clear();
     fused_.clear();
     ++drives_;
     return std::move(drive_log_);
@@ -245,11 +252,19 @@ class OfflineMapper {
   // A traversal of a road that is (now) complete: this drive's evidence of the road accumulates,
   // it is aligned onto the earlier drives' (an earlier drive's partial evidence of the road
   // included: the road is complete now), and the road is explored again on everything seen.
+  //
+  // Memory: the grids of closed roads live in their files (bev/road_<id>.bev, what the road was
+  // explored on), not in memory: a road's file is read back when the road is driven again. Kept in
+  // memory are only the grids of roads that this drive and an earlier one both closed (this
+  // drive's own evidence and the earlier drives', to fuse again; the file holds the fused grid).
   void mapTraversal(const bev::RoadBev& road) {
-    auto [it, fresh] = drive_grids_.try_emplace(road.road_id, road.grid);
+    const int64_t id = road.road_id;
+    const std::string path = bev::roadGridPath(o_.out, id);
+    if (drive_saved_.erase(id)) drive_grids_.emplace(id, bev::BevGrid::load(path));  // closed before in this drive
+    auto [it, fresh] = drive_grids_.try_emplace(id, road.grid);
     if (!fresh) bev::mergeGrid(road.grid, it->second);
-    const bev::BevGrid* grid = &it->second;
     bool completed_partial = false;
+    if (prior_saved_.erase(id)) prior_.emplace(id, bev::BevGrid::load(path));  // the file becomes the fused grid below
     if (auto p = partial_.find(road.road_id); p != partial_.end() && !prior_.count(road.road_id)) {
       prior_[road.road_id] = std::move(p->second.grid);  // an earlier drive ended on it: its evidence, aligned below
       traversals_[road.road_id] = p->second.traversals;
@@ -265,10 +280,15 @@ class OfflineMapper {
                             {"aligned", a.ok}, {"shift_m", {a.shift_m.x(), a.shift_m.y()}},
                             {"correlation", a.correlation}, {"overlap_cells", a.overlap_cells}, {"why", a.why},
                             {"completed_partial", completed_partial}});
-      grid = &(fused_[road.road_id] = std::move(fused));
+      fused.save(path);
+      fused_.insert(id);
+      exploreAndSet(id, fused, std::nullopt);
+      return;
     }
-    grid->save(bev::roadGridPath(o_.out, road.road_id));
-    exploreAndSet(road.road_id, *grid, std::nullopt);
+    it->second.save(path);
+    exploreAndSet(id, it->second, std::nullopt);
+    drive_grids_.erase(it);  // this drive's evidence is the file's
+    drive_saved_.insert(id);
   }
 
   // After the log: the road the car is on (opened, never closed) explored as far as the last pose.
@@ -283,7 +303,7 @@ class OfflineMapper {
     if (!open || !last_position_) return;
     const auto* r = sk_.road(open->road_id);
     if (!r) return;
-    if (drive_grids_.count(r->id) || prior_.count(r->id)) {
+    if (drive_grids_.count(r->id) || drive_saved_.count(r->id) || prior_.count(r->id) || prior_saved_.count(r->id)) {
       mapTraversal(*open);
       return;
     }
@@ -350,10 +370,13 @@ class OfflineMapper {
   std::unique_ptr<bev::BevBuilder> builder_;        // this drive's
   lanes::ExplorerOptions explorer_;
   mapping::MapAssembler assembler_;
-  std::map<int64_t, bev::BevGrid> drive_grids_;  // this drive's evidence per road
-  std::map<int64_t, bev::BevGrid> prior_;        // the earlier drives' fused evidence per road
-  std::map<int64_t, int> traversals_;            // drives in prior_ per road
-  std::map<int64_t, bev::BevGrid> fused_;        // prior_ + this drive, aligned (roads in both)
+  // The evidence per road (see mapTraversal): in memory, or the road's saved file.
+  std::map<int64_t, bev::BevGrid> drive_grids_;  // this drive's, of roads earlier drives closed too
+  std::set<int64_t> drive_saved_;                // this drive's, of the other roads it closed: the file
+  std::map<int64_t, bev::BevGrid> prior_;        // the earlier drives' (fused), of roads this drive closed too
+  std::set<int64_t> prior_saved_;                // the earlier drives' (fused), of the other roads: the file
+  std::map<int64_t, int> traversals_;            // drives in the earlier evidence per road
+  std::set<int64_t> fused_;                      // roads in both, the earlier evidence + this drive's aligned: the file
   struct Partial {
     bev::BevGrid grid;       // the evidence of the drives that ended on it (aligned)
     double station_m = 0.0;  // the furthest any of them reached

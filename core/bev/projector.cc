@@ -432,6 +432,7 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
   const int R = static_cast<int>(std::ceil(options_.max_range_m / res)) + 2, n = 2 * R + 1;
   const int x0 = static_cast<int>(std::floor(c.x() / res)) - R, y0 = static_cast<int>(std::floor(c.y() / res)) - R;
   std::vector<uint8_t> raster(static_cast<size_t>(n) * n, 0);
+  int bx0 = n, bx1 = -1, by0 = n, by1 = -1;  // the box of the raster cells set
   const Eigen::Matrix3d rot = vehicle_to_enu.linear();
   const int w = camera_.width();
   const bool use_raster = mesh && rasterises();
@@ -507,11 +508,14 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
       continue;
     }
     raster[static_cast<size_t>(cy) * n + cx] |= bits;
+    bx0 = std::min(bx0, cx), bx1 = std::max(bx1, cx), by0 = std::min(by0, cy), by1 = std::max(by1, cy);
   }
   splat.pixels = px.size();
-  for (int y = 0; y < n; ++y) {
+  // The cells in (y, x) order, from the box the pixels touched (the camera sees a part of the raster).
+  splat.cells.reserve(px.size());
+  for (int y = by0; y <= by1; ++y) {
     const uint8_t* row = &raster[static_cast<size_t>(y) * n];
-    for (int x = 0; x < n; ++x) {
+    for (int x = bx0; x <= bx1; ++x) {
       if (row[x]) splat.cells.push_back(SplatCell{x + x0, y + y0, row[x]});
     }
   }

@@ -39,17 +39,42 @@ bool fitPlane(const pcl::PointCloud<pcl::PointXYZ>::Ptr& cloud, const GroundExtr
   return true;
 }
 
+// Indices 0..n-1 grouped by key (a counting sort: ascending index within a key); key < 0: left out.
+// One flat array instead of a vector per key: a sweep has ~20k points in 360 slices and 96 cells.
+struct Buckets {
+  std::vector<int> start;  // key k holds items[start[k] .. start[k + 1])
+  std::vector<int> items;
+  Buckets(const std::vector<int>& key, int keys) : start(static_cast<size_t>(keys) + 1, 0) {
+    for (int k : key) {
+      if (k >= 0) ++start[k + 1];
+    }
+    for (int k = 0; k < keys; ++k) start[k + 1] += start[k];
+    items.resize(start[keys]);
+    std::vector<int> next(start.begin(), start.end() - 1);
+    for (size_t i = 0; i < key.size(); ++i) {
+      if (key[i] >= 0) items[next[key[i]]++] = static_cast<int>(i);
+    }
+  }
+  const int* begin(int k) const { return items.data() + start[k]; }
+  const int* end(int k) const { return items.data() + start[k + 1]; }
+};
+
 // One azimuth sector: range bins from the car outwards, each predicted by the previous plane.
-void sectorGround(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::vector<int>>& bins,
+// cells: the sweep's points by sector * nbins + bin.
+void sectorGround(const std::vector<Eigen::Vector3d>& pts, const Buckets& cells, int sector, int nbins,
                   const GroundExtractionOptions& o, std::vector<int>& ground) {
   Plane plane;  // the vehicle's ground plane
   double ref_range = 0.0;
-  for (size_t b = 0; b < bins.size(); ++b) {
+  for (int b = 0; b < nbins; ++b) {
     const double far = o.range_edges_m[b + 1];
     const double band = o.band_base_m + o.band_slope * (far - ref_range);
     auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
     std::vector<int> ids;
-    for (int i : bins[b]) {
+    const int cell = sector * nbins + b;
+    cloud->reserve(cells.end(cell) - cells.begin(cell));
+    ids.reserve(cells.end(cell) - cells.begin(cell));
+    for (const int* it = cells.begin(cell); it != cells.end(cell); ++it) {
+      const int i = *it;
       const auto& p = pts[i];
       if (std::abs(p.z() - plane.zAt(p.x(), p.y())) > band) continue;
       cloud->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())));
@@ -68,14 +93,16 @@ void sectorGround(const std::vector<Eigen::Vector3d>& pts, const std::vector<std
 std::vector<uint8_t> verticalStructures(const std::vector<Eigen::Vector3d>& pts, const std::vector<double>& az,
                                         const std::vector<double>& r, const GroundExtractionOptions& o) {
   const int slices = std::max(1, static_cast<int>(std::lround(360.0 / o.azimuth_slice_deg)));
-  std::vector<std::vector<std::pair<double, int>>> by_slice(slices);
+  std::vector<int> slice_of(pts.size(), -1);
   for (size_t i = 0; i < pts.size(); ++i) {
-    if (!pts[i].allFinite()) continue;
-    const int s = std::min(slices - 1, static_cast<int>(az[i] / (2.0 * M_PI) * slices));
-    by_slice[s].emplace_back(r[i], static_cast<int>(i));
+    if (pts[i].allFinite()) slice_of[i] = std::min(slices - 1, static_cast<int>(az[i] / (2.0 * M_PI) * slices));
   }
+  const Buckets by_slice(slice_of, slices);
   std::vector<uint8_t> vertical(pts.size(), 0);
-  for (auto& slice : by_slice) {
+  std::vector<std::pair<double, int>> slice;
+  for (int s = 0; s < slices; ++s) {
+    slice.clear();
+    for (const int* it = by_slice.begin(s); it != by_slice.end(s); ++it) slice.emplace_back(r[*it], *it);
     std::sort(slice.begin(), slice.end());
     for (size_t k = 0; k + 1 < slice.size(); ++k) {
       const double dz = std::abs(pts[slice[k + 1].second].z() - pts[slice[k].second].z());
@@ -97,7 +124,6 @@ std::vector<int> extractGround(const std::vector<Eigen::Vector3d>& points, const
   (void)quiet;
   const int nbins = static_cast<int>(o.range_edges_m.size()) - 1;
   if (nbins < 1 || o.sectors < 1) return {};
-  std::vector<std::vector<std::vector<int>>> cells(o.sectors, std::vector<std::vector<int>>(nbins));
   std::vector<double> az(points.size(), 0.0), range(points.size(), 0.0);
   for (size_t i = 0; i < points.size(); ++i) {
     if (!points[i].allFinite()) continue;
@@ -105,6 +131,7 @@ std::vector<int> extractGround(const std::vector<Eigen::Vector3d>& points, const
     range[i] = std::hypot(points[i].x(), points[i].y());
   }
   const std::vector<uint8_t> vertical = verticalStructures(points, az, range, o);
+  std::vector<int> cell_of(points.size(), -1);  // sector * nbins + bin
   for (size_t i = 0; i < points.size(); ++i) {
     const auto& p = points[i];
     if (!p.allFinite() || vertical[i]) continue;
@@ -113,10 +140,11 @@ std::vector<int> extractGround(const std::vector<Eigen::Vector3d>& points, const
     if (it == o.range_edges_m.begin() || it == o.range_edges_m.end()) continue;
     const int bin = static_cast<int>(it - o.range_edges_m.begin()) - 1;
     const int sector = std::min(o.sectors - 1, static_cast<int>(az[i] / (2.0 * M_PI) * o.sectors));
-    cells[sector][bin].push_back(static_cast<int>(i));
+    cell_of[i] = sector * nbins + bin;
   }
+  const Buckets cells(cell_of, o.sectors * nbins);
   std::vector<int> ground;
-  for (const auto& sector : cells) sectorGround(points, sector, o, ground);
+  for (int sector = 0; sector < o.sectors; ++sector) sectorGround(points, cells, sector, nbins, o, ground);
   std::sort(ground.begin(), ground.end());
   return ground;
 }

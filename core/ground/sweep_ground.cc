@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 namespace lanemap::ground {
@@ -17,16 +18,41 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 
 std::vector<Eigen::Vector3d> decimateGround(const std::vector<Eigen::Vector3d>& points, double cell_m) {
   if (!(cell_m > 0.0)) return points;
-  std::vector<std::pair<uint64_t, int>> keyed;
-  keyed.reserve(points.size());
+  // Cell (kx, ky) of each point; the cells in (kx, ky) order, each's points in index order.
   const double inv = 1.0 / cell_m;
+  std::vector<int64_t> kx(points.size()), ky(points.size());
+  int64_t x_lo = std::numeric_limits<int64_t>::max(), x_hi = std::numeric_limits<int64_t>::min();
+  int64_t y_lo = x_lo, y_hi = x_hi;
   for (size_t i = 0; i < points.size(); ++i) {
-    const auto kx = static_cast<int64_t>(std::floor(points[i].x() * inv));
-    const auto ky = static_cast<int64_t>(std::floor(points[i].y() * inv));
-    const uint64_t key = (static_cast<uint64_t>(kx + (int64_t{1} << 31)) << 32) | static_cast<uint32_t>(ky + (int64_t{1} << 31));
-    keyed.emplace_back(key, static_cast<int>(i));
+    kx[i] = static_cast<int64_t>(std::floor(points[i].x() * inv));
+    ky[i] = static_cast<int64_t>(std::floor(points[i].y() * inv));
+    x_lo = std::min(x_lo, kx[i]), x_hi = std::max(x_hi, kx[i]), y_lo = std::min(y_lo, ky[i]), y_hi = std::max(y_hi, ky[i]);
   }
-  std::sort(keyed.begin(), keyed.end());  // by cell, then by index: deterministic
+  std::vector<std::pair<uint64_t, int>> keyed(points.size());
+  const bool small = !points.empty() && x_hi - x_lo < (int64_t{1} << 16) && y_hi - y_lo < (int64_t{1} << 16);
+  if (small) {
+    // A 32-bit key (kx - x_lo) << 16 | (ky - y_lo): the same order as (kx, ky). Two stable
+    // counting passes of 16 bits (LSD radix) on the points in index order sort by (key, index),
+    // as std::sort of (key, index) pairs does, in linear time (a sweep: ~8k ground points).
+    std::vector<std::pair<uint64_t, int>> tmp(points.size());
+    for (size_t i = 0; i < points.size(); ++i) {
+      tmp[i] = {static_cast<uint64_t>(kx[i] - x_lo) << 16 | static_cast<uint64_t>(ky[i] - y_lo), static_cast<int>(i)};
+    }
+    std::vector<uint32_t> count(65537);
+    for (int shift : {0, 16}) {
+      std::fill(count.begin(), count.end(), 0u);
+      for (const auto& e : tmp) ++count[((e.first >> shift) & 0xFFFF) + 1];
+      for (size_t b = 1; b < count.size(); ++b) count[b] += count[b - 1];
+      for (const auto& e : tmp) keyed[count[(e.first >> shift) & 0xFFFF]++] = e;
+      if (shift == 0) tmp.swap(keyed);
+    }
+  } else {
+    for (size_t i = 0; i < points.size(); ++i) {
+      const uint64_t key = (static_cast<uint64_t>(kx[i] + (int64_t{1} << 31)) << 32) | static_cast<uint32_t>(ky[i] + (int64_t{1} << 31));
+      keyed[i] = {key, static_cast<int>(i)};
+    }
+    std::sort(keyed.begin(), keyed.end());  // by cell, then by index: deterministic
+  }
   std::vector<Eigen::Vector3d> out;
   for (size_t a = 0; a < keyed.size();) {
     size_t b = a;

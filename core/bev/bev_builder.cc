@@ -106,6 +106,22 @@ bool decodeLabelImage(LabelEncoding encoding, const uint8_t* data, size_t size, 
   return true;
 }
 
+namespace {
+
+// Releases a held mutex for a scope (and takes it again, also on an exception). The BEV builder's
+// state other than the worker's queue and finished meshes is changed by the caller's thread only
+// (every public method is called from one thread, the LCM thread or the log reader), so the caller
+// may work without the lock on what it alone changes.
+struct Unlocked {
+  explicit Unlocked(std::mutex& m) : m(m) { m.unlock(); }
+  ~Unlocked() { m.lock(); }
+  Unlocked(const Unlocked&) = delete;
+  Unlocked& operator=(const Unlocked&) = delete;
+  std::mutex& m;
+};
+
+}  // namespace
+
 BevBuilder::BevBuilder(const skeleton::Skeleton& skeleton, const camera::CameraModel& camera, BevBuilderOptions options)
     : skeleton_(skeleton),
       options_(options),
@@ -307,7 +323,13 @@ void BevBuilder::project(int64_t utime, const cv::Mat& labels, const Eigen::Isom
   }
   const bool use_mesh = mesh != nullptr;
   if (on_mesh_choice_) on_mesh_choice_(utime, use_mesh ? mesh->utime : 0);
-  FrameSplat splat = projector_.project(labels, pose, use_mesh ? mesh->mesh.get() : nullptr);
+  FrameSplat splat;
+  {
+    // The projection reads only the frame, the pose and the mesh (held here): the worker may take
+    // the lock meanwhile.
+    const Unlocked unlocked(mutex_);
+    splat = projector_.project(labels, pose, use_mesh ? mesh->mesh.get() : nullptr);
+  }
   splat.utime = utime;
   accumulator_.add(splat);
   ++stats_.frames_projected;
@@ -341,7 +363,13 @@ void BevBuilder::tryPendingSweep() {
     const auto& p = pending_sweep_->packets[i];
     packets.push_back(ground::SweepPacket{pending_sweep_->packet_utime[i], p.data(), p.size()});
   }
-  auto points = ground::sweepToEnu(packets, options_.lidar_to_vehicle, [this](int64_t u) { return poses_.at(u); });
+  std::optional<ground::SweepPoints> points;
+  {
+    // Decoding needs only the poses, which only the caller's thread changes: the worker may take
+    // the lock meanwhile (to publish a mesh and take the next sweep).
+    const Unlocked unlocked(mutex_);
+    points = ground::sweepToEnu(packets, options_.lidar_to_vehicle, [this](int64_t u) { return poses_.at(u); });
+  }
   pending_sweep_.reset();
   if (!points) {
     ++stats_.sweeps_no_pose;

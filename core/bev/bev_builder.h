@@ -218,7 +218,10 @@ class BevBuilder {
   int64_t newest_sweep_end_ = 0;  // last packet time of the newest sweep received
   bool finishing_ = false;
 
-  mutable std::mutex mutex_;  // guards everything here (the worker takes it to pick work and publish)
+  // Taken by every public method and by the worker (to pick work and publish a mesh); the caller
+  // releases it while it decodes a sweep or projects a frame (Unlocked in bev_builder.cc: the
+  // public methods are called from one thread, so what the worker does not touch stays put).
+  mutable std::mutex mutex_;
   std::condition_variable_any cv_;  // also waited on with mutex_ itself (drainFrames)
   BevBuilderStats stats_;
   std::deque<std::shared_ptr<const ground::SweepGround>> meshes_;  // finished, oldest first

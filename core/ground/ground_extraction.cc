@@ -143,9 +143,16 @@ std::vector<int> extractGround(const std::vector<Eigen::Vector3d>& points, const
     cell_of[i] = sector * nbins + bin;
   }
   const Buckets cells(cell_of, o.sectors * nbins);
+  std::vector<int> found;
+  for (int sector = 0; sector < o.sectors; ++sector) sectorGround(points, cells, sector, nbins, o, found);
+  // Ascending (each point is in one cell, so at most once): flags instead of a sort.
+  std::vector<uint8_t> is_ground(points.size(), 0);
+  for (int i : found) is_ground[i] = 1;
   std::vector<int> ground;
-  for (int sector = 0; sector < o.sectors; ++sector) sectorGround(points, cells, sector, nbins, o, ground);
-  std::sort(ground.begin(), ground.end());
+  ground.reserve(found.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (is_ground[i]) ground.push_back(static_cast<int>(i));
+  }
   return ground;
 }
 

@@ -69,6 +69,7 @@ std::optional<SweepPoints> sweepToEnu(const std::vector<SweepPacket>& packets, c
   SweepPoints out;
   lidar::PacketDecoder decoder(model);
   std::vector<lidar::LidarPoint> pts;
+  out.enu.reserve(packets.size() * 384);  // a VLP-16 packet: 12 blocks x 32 firings
   int64_t first = 0, last = 0;
   for (const auto& pk : packets) {
     ++out.packets;
@@ -105,6 +106,7 @@ SweepGround buildSweepGround(const SweepPoints& sweep, const SweepGroundOptions&
   vehicle.reserve(sweep.enu.size());
   for (const auto& p : sweep.enu) vehicle.push_back(enu_to_vehicle * p);
   std::vector<Eigen::Vector3d> ground;
+  ground.reserve(vehicle.size() / 2);
   const double max_r2 = options.max_range_m * options.max_range_m;
   for (int i : extractGround(vehicle, options.extraction)) {
     if (vehicle[i].head<2>().squaredNorm() <= max_r2) ground.push_back(sweep.enu[i]);

@@ -37,6 +37,12 @@ echo "== BEV builder: memory, 30 s drive vs 120 s drive"
 "$bin/lanemap-bench-bev" --memory 30
 "$bin/lanemap-bench-bev" --memory 120
 
+# Issue 17: lanemap-offline on the demo drive against the drive's duration (LIDAR mesh with the
+# meshes on a second core, in the main thread, and flat), and its peak memory on a 240 s against a
+# 60 s Monaco drive (about 6 minutes: the three drives are simulated first).
+echo "== lanemap-offline: speed and memory (tools/bench/offline_speed.sh)"
+tools/bench/offline_speed.sh "$build" "$out/offline-speed"
+
 # Issue 7: the segmenter's frames/s at the camera resolution (640x360), OpenCV on 1 and 2 threads.
 echo "== segmenter: shipped model on 640x360 frames"
 "$bin/lanemap-bench-seg"

@@ -49,8 +49,10 @@ echo "== segmenter: shipped model on 640x360 frames"
 
 # Issue 6: the live graph at 1x on the demo drive (60 s, seed 1), segmenter on the model and on the
 # truth labels: CPU share and latency per process, frame-to-BEV, drop counters, map completion.
+# Issue 17: five runs on the model, each with its drop counters (the demo drive offline_speed.sh made).
 echo "== live graph at real time (lanemap-logplayer 1x, demo.yaml, private netns): demo drive"
-tools/bench/live_graph.sh "$build"
+tools/bench/live_graph.sh "$build" --drive "$out/offline-speed/demo" --modes model --runs 5
+tools/bench/live_graph.sh "$build" --drive "$out/offline-speed/demo" --modes oracle
 
 # Issue 20: the viewer's CPU while the demo drive plays at 1x (loaded the way the page loads it).
 echo "== lanemap-viewer CPU at 1x (tools/bench/viewer_cpu.sh)"

@@ -233,14 +233,15 @@ void BevBuilder::decideMeshes() {
     const auto r = poses_.lookup(f.utime, &pose, finishing_);
     if (r == PoseBuffer::Lookup::kTooNew || r == PoseBuffer::Lookup::kEmpty) break;
     if (r != PoseBuffer::Lookup::kOk) continue;  // never projected: counted by projectDecided
-    const auto wait = meshWait(f.utime);
+    const int64_t nearest = nearestDecodedSweep(f.utime);
+    const auto wait = meshWait(f.utime, nearest);
     if (wait == MeshWait::kSweepNeedsPoses) break;  // the next pose decodes it
     if (wait == MeshWait::kSweepToCome) {
       if (static_cast<double>(poses_.newest() - f.utime) < options_.mesh_wait_s * 1e6) break;
       ++stats_.frames_mesh_wait_expired;
     }
     f.mesh_decided = true;
-    f.mesh_utime = nearestDecodedSweep(f.utime);
+    f.mesh_utime = nearest;
     newest_decided_utime_ = f.utime;
   }
 }
@@ -271,11 +272,10 @@ void BevBuilder::projectDecided(bool wait_for_worker) {
   }
 }
 
-BevBuilder::MeshWait BevBuilder::meshWait(int64_t utime) const {
+BevBuilder::MeshWait BevBuilder::meshWait(int64_t utime, int64_t nearest) const {
   if (!options_.use_lidar || finishing_ || newest_sweep_end_ == 0) return MeshWait::kNo;
   if (newest_sweep_end_ < utime - 1000000) return MeshWait::kNo;  // no sweep for a second: no LIDAR now
   // Only a sweep that may be nearer than the nearest decoded one is worth waiting for.
-  const int64_t nearest = nearestDecodedSweep(utime);
   const double best =
       nearest != 0 ? std::abs(static_cast<double>(nearest - utime)) : options_.max_mesh_age_s * 1e6;
   auto near = [&](int64_t mid) { return std::abs(static_cast<double>(mid - utime)) < best; };

@@ -190,8 +190,9 @@ class BevBuilder {
   // come (waits at most mesh_wait_s); a sweep near it waits for its poses (the next pose decodes
   // it). A decoded sweep counts whether its mesh is finished or still in the worker: the decision
   // does not depend on the worker's progress, only on the messages so far.
+  // nearest: nearestDecodedSweep(utime), which is then the frame's mesh.
   enum class MeshWait { kNo, kSweepToCome, kSweepNeedsPoses };
-  MeshWait meshWait(int64_t utime) const;
+  MeshWait meshWait(int64_t utime, int64_t nearest) const;
   // The decoded sweep (finished, in the worker or queued) nearest to utime within max_mesh_age_s,
   // the earlier on a tie; 0: none.
   int64_t nearestDecodedSweep(int64_t utime) const;

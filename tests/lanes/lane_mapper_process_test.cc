@@ -35,7 +35,14 @@ const std::string kOsm = std::string(LANEMAP_DATA_DIR) + "/osm/west-oakland.osm"
 const std::string kBinary = std::string(LANEMAP_BIN_DIR) + "/lanemap-lane-mapper";
 const std::string kConfig = std::string(LANEMAP_SOURCE_DIR) + "/config/lane_mapper.yaml";
 
+// LANE_MAP and the lane mapper's STATUS, as they arrive on `lcm`.
 struct Collector {
+  explicit Collector(lcm::LCM& lcm) {
+    lcm.subscribe("LANE_MAP", &Collector::onMap, this)->setQueueCapacity(100);
+    lcm.subscribe("STATUS", &Collector::onStatus, this)->setQueueCapacity(100);
+  }
+  Collector(const Collector&) = delete;
+  Collector& operator=(const Collector&) = delete;
   std::vector<lane_map_t> maps;
   std::vector<status_t> status;
   void onMap(const lcm::ReceiveBuffer*, const std::string&, const lane_map_t* m) { maps.push_back(*m); }
@@ -111,9 +118,7 @@ TEST(LaneMapperProcess, MapsARoadStoresItAndReloadsAfterRestart) {
 
   lcm::LCM lcm(url);
   ASSERT_TRUE(lcm.good());
-  Collector c;
-  lcm.subscribe("LANE_MAP", &Collector::onMap, &c)->setQueueCapacity(100);
-  lcm.subscribe("STATUS", &Collector::onStatus, &c)->setQueueCapacity(100);
+  Collector c(lcm);
   {
     lanemap::testing::ChildProcess proc({kBinary, "--config", kConfig, "--osm", kOsm, "--store", store, "--lcm-url", url});
     ASSERT_TRUE(proc.started());
@@ -206,9 +211,7 @@ TEST(LaneMapperProcess, MapsAPartialRoadAsFarAsDrivenThenComplete) {
   const std::string url = lanemap::testing::testUdpmUrl(7684);
   lcm::LCM lcm(url);
   ASSERT_TRUE(lcm.good());
-  Collector c;
-  lcm.subscribe("LANE_MAP", &Collector::onMap, &c)->setQueueCapacity(100);
-  lcm.subscribe("STATUS", &Collector::onStatus, &c)->setQueueCapacity(100);
+  Collector c(lcm);
   const std::string road_file = store + "/lanes/road_" + std::to_string(road->id) + ".osm";
   const auto& o = sk.frame().origin();
   const lanes::FrenetFrame frame(road->polyline);
@@ -292,9 +295,7 @@ TEST(LaneMapperProcess, ExportIntervalWritesTheWholeMapAtMostThatOftenAndAtStop)
   const std::string url = lanemap::testing::testUdpmUrl(7694);
   lcm::LCM lcm(url);
   ASSERT_TRUE(lcm.good());
-  Collector c;
-  lcm.subscribe("LANE_MAP", &Collector::onMap, &c)->setQueueCapacity(100);
-  lcm.subscribe("STATUS", &Collector::onStatus, &c)->setQueueCapacity(100);
+  Collector c(lcm);
   const auto& o = sk.frame().origin();
   const std::string whole = store + "/lane_map.osm";
   const auto publish = [&](const skeleton::AtomicRoad& r, const std::string& grid) {

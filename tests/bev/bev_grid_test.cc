@@ -1,4 +1,5 @@
 #include "core/bev/bev_grid.h"
+#include "tests/common/read_file.h"
 #include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
@@ -101,8 +102,7 @@ TEST(BevGrid, TraversalsAreSavedAndAnOlderFileIsOneTraversal) {
   EXPECT_EQ(header.traversals, 3);
 
   // The same grid as format 001 wrote it: magic ...001, no traversal field after the frames.
-  std::ifstream f(path, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  std::string bytes = lanemap::testing::readFile(path);
   ASSERT_EQ(bytes.substr(0, 8), "LMBEV002");
   bytes[7] = '1';
   bytes.erase(8 + 8 + 4 + 4 + 4, 4);  // magic, resolution, tile size, layers, frames | traversals

@@ -4,6 +4,7 @@
 // configs, the shipped model and the bundled OSM under <prefix>/share/lanemap, and give the same
 // bytes as the build tree's programs.
 #include "tests/common/lcm_log.h"
+#include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 
 #include <gtest/gtest.h>
@@ -14,15 +15,9 @@
 
 namespace fs = std::filesystem;
 namespace lt = lanemap::testing;
+using lanemap::testing::readFile;
 
 namespace {
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 std::string quoted(const std::string& s) { return "'" + s + "'"; }
 
@@ -76,12 +71,12 @@ TEST(Install, TheInstalledProgramsRunTheDemoStepsWithoutTheSourceTree) {
 
   // The installed simulator and mapper give the build tree's bytes.
   for (const char* f : {"drive.lcmlog", "groundtruth.osm", "roads.osm"}) {  // scenario.json names paths
-    EXPECT_EQ(slurp(fs::path(work) / "drive" / f), slurp(tmp.path() / "ref-drive" / f)) << f << " differs";
+    EXPECT_EQ(readFile(fs::path(work) / "drive" / f), readFile(tmp.path() / "ref-drive" / f)) << f << " differs";
   }
-  const std::string map = slurp(fs::path(work) / "map/map.osm");
+  const std::string map = readFile(fs::path(work) / "map/map.osm");
   EXPECT_GT(map.size(), 1000u);
-  EXPECT_EQ(map, slurp(tmp.path() / "ref-map/map.osm")) << "the installed lanemap-offline made another map";
-  EXPECT_NE(slurp(fs::path(work) / "eval.json").find("\"lanes\""), std::string::npos);
+  EXPECT_EQ(map, readFile(tmp.path() / "ref-map/map.osm")) << "the installed lanemap-offline made another map";
+  EXPECT_NE(readFile(fs::path(work) / "eval.json").find("\"lanes\""), std::string::npos);
 
   // The shipped model labelled every camera frame of the drive.
   const auto in = lt::readLcmLog(fs::path(work) / "drive/drive.lcmlog");
@@ -91,7 +86,7 @@ TEST(Install, TheInstalledProgramsRunTheDemoStepsWithoutTheSourceTree) {
   EXPECT_EQ(lt::countChannel(out, "SEMANTIC_FRONT"), frames);
 
   // Every lanemap program of the launch file runs from the installation.
-  const std::string launch = slurp(fs::path(work) / "launch.txt");
+  const std::string launch = readFile(fs::path(work) / "launch.txt");
   EXPECT_NE(launch.find(bin + "lanemap-segmenter"), std::string::npos) << launch;
   EXPECT_NE(launch.find(bin + "lanemap-lane-mapper"), std::string::npos) << launch;
   EXPECT_EQ(launch.find(LANEMAP_SOURCE_DIR), std::string::npos) << launch;

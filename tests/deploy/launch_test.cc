@@ -3,6 +3,7 @@
 // it), and clear errors for bad launch files. Children are plain shell commands that leave traces
 // in files, so no network is involved.
 #include "tests/common/child_process.h"
+#include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 
 #include <gtest/gtest.h>
@@ -17,13 +18,6 @@ using namespace lanemap::testing;
 using namespace std::chrono_literals;
 
 std::string launchBin() { return binPath("lanemap-launch"); }
-
-std::string readFile(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
 
 int lines(const std::string& path) {
   const std::string s = readFile(path);

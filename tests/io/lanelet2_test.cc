@@ -2,6 +2,7 @@
 // round trip, the file follows Lanelet2's rules, foreign maps (JOSM ids, reversed bounds, the
 // Lanelet2 project's Karlsruhe example) read correctly, bad input throws with the path.
 #include "core/io/lanelet2.h"
+#include "tests/common/read_file.h"
 #include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
@@ -25,6 +26,7 @@
 namespace lanemap::io {
 namespace {
 
+using lanemap::testing::readFile;
 using map::LaneletKind;
 using map::LaneMap;
 using map::LineType;
@@ -41,11 +43,6 @@ std::string tempPath(const std::string& name) { return scratch().str(name); }
 
 void writeText(const std::string& path, const std::string& text) {
   std::ofstream(path) << text;
-}
-
-std::string readText(const std::string& path) {
-  std::ifstream in(path);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 map::LineString line(int64_t id, LineType type, std::vector<Eigen::Vector3d> pts) {
@@ -571,7 +568,7 @@ TEST(Lanelet2, BadFilesThrowWithThePath) {
   // A malformed value in the sidecar: the error names the sidecar and the lanelet.
   const std::string bad_side = tempPath("bad_side.osm");
   writeLanelet2(handMadeMap(), bad_side);
-  std::string side = readText(lanelet2SidecarPath(bad_side));
+  std::string side = readFile(lanelet2SidecarPath(bad_side));
   const std::string key = "\"road_id\":7";
   ASSERT_NE(side.find(key), std::string::npos);
   side.replace(side.find(key), key.size(), "\"road_id\":\"seven\"");
@@ -665,7 +662,7 @@ TEST(Lanelet2, SidecarHoldsMetadataFollowsACopyAndIsIgnoredWhenStale) {
   EXPECT_EQ(lanelet2SidecarPath(path), dir + "/map.lanemap.json");
   EXPECT_EQ(lanelet2SidecarPath("/x/y.xml"), "/x/y.xml.lanemap.json");
   ASSERT_TRUE(std::filesystem::exists(dir + "/map.lanemap.json"));
-  const auto side = nlohmann::json::parse(readText(dir + "/map.lanemap.json"));
+  const auto side = nlohmann::json::parse(readFile(dir + "/map.lanemap.json"));
   EXPECT_EQ(side["lanelets"]["101"]["road_id"].get<int64_t>(), 7);
   EXPECT_EQ(side["lanelets"]["101"]["stop_line"].get<int64_t>(), 6);
   EXPECT_EQ(side["lanelets"]["102"]["kind"].get<std::string>(), "intersection");
@@ -774,7 +771,7 @@ TEST(Lanelet2, AutowareTagsLaneChangeSpeedLimitTurnDirection) {
   r2.close();
   EXPECT_EQ(way_tags.at(2).at("lane_change"), "no");
 
-  const std::string info = readText(dir + "/map_projector_info.yaml");
+  const std::string info = readFile(dir + "/map_projector_info.yaml");
   EXPECT_NE(info.find("projector_type: LocalCartesian\n"), std::string::npos) << info;
   EXPECT_NE(info.find("vertical_datum: WGS84\n"), std::string::npos) << info;
   EXPECT_NE(info.find("  latitude: 49.0000000000\n"), std::string::npos) << info;
@@ -932,7 +929,7 @@ TEST(Lanelet2, MalformedRulesInTheSidecarThrowWithItsPath) {
   const std::string path = tempPath("rules_bad_sidecar.osm");
   writeLanelet2(withRules(map::RegulatoryKind::kTrafficLight), path);
   const std::string side = lanelet2SidecarPath(path);
-  std::string text = readText(side);
+  std::string text = readFile(side);
   const auto at = text.find("\"osm_node\":4242");
   ASSERT_NE(at, std::string::npos) << text.substr(0, 400);
   text.replace(at, std::string("\"osm_node\":4242").size(), "\"osm_node\":\"x\"");

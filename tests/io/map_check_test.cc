@@ -3,6 +3,7 @@
 // offending id. The tool itself: exit status and output.
 #include "core/io/lanelet2.h"
 #include "core/io/map_check.h"
+#include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 
 #include <gtest/gtest.h>
@@ -14,6 +15,7 @@
 namespace lanemap::io {
 namespace {
 
+using lanemap::testing::readFile;
 using map::LaneletKind;
 using map::LaneMap;
 using map::LineType;
@@ -64,11 +66,6 @@ LaneMap goodMap() {
   m.lanelets[2].intersection_id = 9;
   m.lanelets[2].turn = map::TurnDirection::kStraight;
   return m;
-}
-
-std::string readText(const std::string& path) {
-  std::ifstream in(path);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 void replaceOnce(std::string& text, const std::string& from, const std::string& to) {
@@ -153,7 +150,7 @@ TEST(MapCheck, EachBrokenRuleFailsAlone) {
   }
   {  // Autoware's layout: a stop line no regulatory element refers to
     writeAutowareMapFolder(goodMap(), dir.str("stop"));
-    std::string t = readText(dir.str("stop/lanelet2_map.osm"));
+    std::string t = readFile(dir.str("stop/lanelet2_map.osm"));
     replaceOnce(t, "role=\"refers\"", "role=\"other\"");
     std::ofstream(dir.str("stop/edited.osm")) << t;
     EXPECT_EQ(failures(dir.str("stop/edited.osm"), true), (Failures{{"stop_line_refs", {6}}}));
@@ -237,7 +234,7 @@ TEST(MapCheck, RegulatoryElementsAndCrosswalks) {
     EXPECT_EQ(failures(write("nolight.osm", t)), (Failures{{"regulatory_elements", {200}}}));
   }
   {  // Autoware's layout: the crosswalk element refers to no crosswalk lanelet
-    std::string t = readText(dir.str("aw/lanelet2_map.osm"));
+    std::string t = readFile(dir.str("aw/lanelet2_map.osm"));
     replaceOnce(t, "ref=\"300\" role=\"refers\"", "ref=\"300\" role=\"other\"");
     std::ofstream(dir.str("aw/edited.osm")) << t;
     EXPECT_EQ(failures(dir.str("aw/edited.osm"), true), (Failures{{"crosswalk_refs", {300}}}));

@@ -3,6 +3,7 @@
 // readLanelet2 reads them back.
 #include "core/io/geojson.h"
 #include "core/io/lanelet2.h"
+#include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 #include "tests/eval/test_maps.h"
 
@@ -30,11 +31,9 @@ TEST(PartialMetadata, SidecarAndGeoJsonCarryPartialAndConfidenceAndTheReaderRead
   lanemap::testing::TempDir dir("partial-metadata");
   const std::string path = dir.str("map.osm");
   lanemap::io::writeLanelet2(b.m, path);
-  std::ifstream osm(path);
-  std::stringstream xml;
-  xml << osm.rdbuf();
-  EXPECT_EQ(xml.str().find("partial"), std::string::npos) << "not a tag of the OSM file";
-  EXPECT_EQ(xml.str().find("confidence"), std::string::npos);
+  const std::string xml = lanemap::testing::readFile(path);
+  EXPECT_EQ(xml.find("partial"), std::string::npos) << "not a tag of the OSM file";
+  EXPECT_EQ(xml.find("confidence"), std::string::npos);
 
   const auto back = lanemap::io::readLanelet2(path, 37.8, -122.3);
   ASSERT_EQ(back.lanelets.size(), 2u);

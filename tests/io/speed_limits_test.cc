@@ -4,6 +4,7 @@
 #include "core/io/speed_limits.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
+#include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 
 #include <gtest/gtest.h>
@@ -15,8 +16,7 @@ namespace {
 namespace lt = lanemap::testing;
 
 TEST(SpeedLimits, FromMaxspeedOfTheRoadsWays) {
-  std::ifstream in(lt::dataPath("osm/west-oakland.osm"));
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string text = lt::readFile(lt::dataPath("osm/west-oakland.osm"));
   // The extract has no maxspeed: give the secondary roads 25 mph.
   size_t tagged = 0;
   const std::string secondary = "<tag k=\"highway\" v=\"secondary\"/>";

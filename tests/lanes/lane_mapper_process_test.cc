@@ -13,6 +13,7 @@
 #include "lanemap/status_t.hpp"
 #include "tests/common/child_process.h"
 #include "tests/common/netns.h"
+#include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 #include "tests/lanes/synthetic_bev.h"
 #include "tests/common/status.h"
@@ -277,10 +278,7 @@ TEST(LaneMapperProcess, ExportIntervalWritesTheWholeMapAtMostThatOftenAndAtStop)
   const std::string store = tmp.str("store");
   const std::string config = tmp.str("lane_mapper.yaml");
   {
-    std::ifstream in(kConfig);
-    std::ostringstream text;
-    text << in.rdbuf();
-    std::string yaml = text.str();
+    std::string yaml = lanemap::testing::readFile(kConfig);
     const std::string key = "export_interval_s: 0 ";
     const auto at = yaml.find(key);
     ASSERT_NE(at, std::string::npos) << "config/lane_mapper.yaml has no `" << key << "`";

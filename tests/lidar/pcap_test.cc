@@ -2,6 +2,7 @@
 // (other byte order, nanosecond stamps, truncated, not a pcap), and of decoding the pcaps.
 #include "core/lidar/pcap.h"
 #include "core/lidar/velodyne.h"
+#include "tests/common/read_file.h"
 
 #include <gtest/gtest.h>
 
@@ -18,11 +19,6 @@ namespace lanemap::lidar {
 namespace {
 
 const std::string kDir = std::string(LANEMAP_DATA_DIR) + "/lidar/";
-
-std::vector<uint8_t> readAll(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 std::string writeTemp(const std::string& name, const std::vector<uint8_t>& bytes) {
   const std::string path = ::testing::TempDir() + "lanemap_lidar_" + name;
@@ -169,7 +165,8 @@ TEST(RawPayloads, RecordingHas1000Payloads) {
 // ------------------------------------------------------------------------ derived files
 
 TEST(Pcap, BigEndianAndNanosecondFilesGiveTheSamePayloads) {
-  const auto orig_bytes = readAll(kDir + "vlp16_sample.pcap");
+  const std::string orig_file = lanemap::testing::readFile(kDir + "vlp16_sample.pcap");
+  const std::vector<uint8_t> orig_bytes(orig_file.begin(), orig_file.end());
   const auto orig = readPcapUdp(kDir + "vlp16_sample.pcap");
   for (bool big : {false, true})
     for (bool nano : {false, true}) {
@@ -188,7 +185,8 @@ TEST(Pcap, BigEndianAndNanosecondFilesGiveTheSamePayloads) {
 }
 
 TEST(Pcap, TruncatedAndForeignFilesThrowClearErrors) {
-  const auto bytes = readAll(kDir + "vlp16_sample.pcap");
+  const std::string file = lanemap::testing::readFile(kDir + "vlp16_sample.pcap");
+  const std::vector<uint8_t> bytes(file.begin(), file.end());
   auto expectError = [](const std::string& path, const std::string& needle) {
     try {
       readPcapUdp(path);
@@ -224,7 +222,8 @@ TEST(Pcap, TruncatedAndForeignFilesThrowClearErrors) {
 }
 
 TEST(Pcap, SkipsNonUdpFramesAndReadsVlanTaggedOnes) {
-  const auto bytes = readAll(kDir + "vlp16_sample.pcap");
+  const std::string file = lanemap::testing::readFile(kDir + "vlp16_sample.pcap");
+  const std::vector<uint8_t> bytes(file.begin(), file.end());
   // header + first record (a data frame, 1248 bytes), then the same frame with an 802.1Q tag,
   // then an ARP frame.
   std::vector<uint8_t> out(bytes.begin(), bytes.begin() + 24 + 16 + 1248);

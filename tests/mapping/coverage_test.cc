@@ -13,6 +13,7 @@
 #include "core/config/map_config.h"
 #include "core/io/lanelet2.h"
 #include "core/osm/osm_data.h"
+#include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 #include "tests/common/temp_dir.h"
 
@@ -268,11 +269,9 @@ TEST(Coverage, TheToolWritesTheFiguresAndNamesWhatItCouldNotRead) {
   EXPECT_EQ(mapped, 1);
   const cv::Mat png = cv::imread(out + "/c.png");
   EXPECT_GT(png.cols, 100);
-  std::ifstream xf(out + "/plan.gpx");
-  std::stringstream gpx;
-  gpx << xf.rdbuf();
+  const std::string gpx = lanemap::testing::readFile(out + "/plan.gpx");
   size_t points = 0, expected = 0;
-  for (size_t at = gpx.str().find("<trkpt"); at != std::string::npos; at = gpx.str().find("<trkpt", at + 1)) ++points;
+  for (size_t at = gpx.find("<trkpt"); at != std::string::npos; at = gpx.find("<trkpt", at + 1)) ++points;
   for (const int64_t id : plan.roads) expected += sk.road(id)->polyline.size();
   EXPECT_EQ(points, expected);
 

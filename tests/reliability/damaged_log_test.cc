@@ -8,6 +8,7 @@
 #include "tests/bev/bev_replay.h"
 #include "tests/common/child_process.h"
 #include "tests/common/netns.h"
+#include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 
 #include <gtest/gtest.h>
@@ -26,14 +27,11 @@ namespace {
 using namespace lanemap;
 namespace fs = std::filesystem;
 namespace lt = lanemap::testing;
+using lanemap::testing::readFile;
 
 constexpr int kEvents = 20, kData = 1000;
 constexpr int64_t kEventBytes = 4 + 8 + 8 + 4 + 4 + 1 + kData;  // sync, number, time, lengths, channel "X", data
 
-std::string readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
 void writeBytes(const std::string& path, const std::string& bytes) { std::ofstream(path, std::ios::binary) << bytes; }
 
 struct ReadResult {
@@ -58,7 +56,7 @@ TEST(LogReader, CountsTheEventsItReadAndTheBytesItCouldNot) {
     const std::vector<uint8_t> data(kData, 0x55);
     for (int i = 0; i < kEvents; ++i) w.write("X", 1000 * i, data.data(), data.size());
   }
-  const std::string bytes = readBytes(good);
+  const std::string bytes = readFile(good);
   ASSERT_EQ(static_cast<int64_t>(bytes.size()), kEvents * kEventBytes);
   const ReadResult whole = readAll(good);
   EXPECT_EQ(whole.events, kEvents);
@@ -133,7 +131,7 @@ TEST(LogPlayer, PlaysEveryReadableEventOfADamagedLogAtItsPaceAndPassesOverABadTi
       w.write("X", 1'700'000'000'000'000 + t, data.data(), data.size());
     }
   }
-  std::string bytes = readBytes(good);
+  std::string bytes = readFile(good);
   ASSERT_EQ(static_cast<int64_t>(bytes.size()), kN * kOne);
   bytes[10 * kOne] = 0;
   const std::string hit = dir.str("hit.lcmlog");
@@ -168,7 +166,7 @@ TEST(LogPlayer, PlaysEveryReadableEventOfADamagedLogAtItsPaceAndPassesOverABadTi
   EXPECT_EQ(got.ids, want);
   EXPECT_GE(wall_s, 0.6) << "played faster than the log";
   EXPECT_LT(wall_s, 30.0) << "waited for the bad timestamp";
-  const std::string err = readBytes(dir.str("hit.err"));
+  const std::string err = readFile(dir.str("hit.err"));
   EXPECT_NE(err.find("is damaged, played what could be read: 38 events read"), std::string::npos) << err;
   EXPECT_NE(err.find("2 timestamp jumps"), std::string::npos) << err;  // forward to event 30, back after it
 
@@ -176,18 +174,18 @@ TEST(LogPlayer, PlaysEveryReadableEventOfADamagedLogAtItsPaceAndPassesOverABadTi
   writeBytes(dir.str("noise.lcmlog"), std::string(5000, 'x'));
   lt::ChildProcess noise = play(dir.str("noise.lcmlog"), dir.str("noise.err"));
   EXPECT_EQ(noise.waitExit(std::chrono::seconds(30)), 2);
-  EXPECT_NE(readBytes(dir.str("noise.err")).find("not an LCM log, or no whole event in it"), std::string::npos);
+  EXPECT_NE(readFile(dir.str("noise.err")).find("not an LCM log, or no whole event in it"), std::string::npos);
 }
 
 TEST(DamagedLog, OfflineMapsWhatIsReadableSaysSoAndRefusesANonLog) {
   const std::string drive = lt::sharedSimDrive("osm/west-oakland.osm", lt::kBevDriveSeconds, lt::kBevDriveSeed, lt::kBevDriveArgs);
   ASSERT_FALSE(drive.empty());
   lt::TempDir dir("damaged-offline");
-  const std::string bytes = readBytes(drive + "/drive.lcmlog");
+  const std::string bytes = readFile(drive + "/drive.lcmlog");
   const auto offline = [&](const std::string& log, const std::string& out) {
     return lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --log " + log + " --osm " + drive + "/roads.osm --out " + out);
   };
-  const auto summary = [](const std::string& out) { return nlohmann::json::parse(readBytes(out + "/summary.json")); };
+  const auto summary = [](const std::string& out) { return nlohmann::json::parse(readFile(out + "/summary.json")); };
 
   int64_t events = 0, middle = 0;  // the whole log's events; where the event nearest its middle starts
   {
@@ -243,7 +241,7 @@ TEST(DamagedLog, OfflineMapsWhatIsReadableSaysSoAndRefusesANonLog) {
   writeBytes(dir.str("earlier-seg.lcmlog"), "an earlier output");
   const auto se = segment(dir.str("earlier-seg.lcmlog"));
   EXPECT_EQ(se.exit_code, 2) << se.output;
-  EXPECT_EQ(readBytes(dir.str("earlier-seg.lcmlog")), "an earlier output");
+  EXPECT_EQ(readFile(dir.str("earlier-seg.lcmlog")), "an earlier output");
   EXPECT_FALSE(fs::exists(dir.str("earlier-seg.lcmlog.partial")));
 }
 

@@ -14,6 +14,7 @@
 #include "lanemap/lidar_packets_t.hpp"
 #include "lanemap/lidar_points_t.hpp"
 #include "lanemap/status_t.hpp"
+#include "tests/common/read_file.h"
 #include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
@@ -237,8 +238,7 @@ size_t openDescriptors() {
 // libosmium 2.18 leaked the file descriptor of every corrupt PBF it failed to parse (found by
 // fuzz/harness/osm_pbf.cc); readOsm closes it now. 50 corrupt files: no descriptor more.
 TEST(HostileOsm, ACorruptPbfLeavesNoOpenDescriptor) {
-  std::ifstream in(std::string(LANEMAP_DATA_DIR) + "/osm/monaco.osm.pbf", std::ios::binary);
-  std::vector<char> pbf((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string pbf = lanemap::testing::readFile(std::string(LANEMAP_DATA_DIR) + "/osm/monaco.osm.pbf");
   ASSERT_GT(pbf.size(), 5000u);
   const lanemap::testing::TempDir dir("hostile-pbf");
   const std::string path = dir.str("cut.osm.pbf");

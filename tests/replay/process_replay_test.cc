@@ -4,6 +4,7 @@
 // field; the comparison itself (processes/framework/message_json.h) tells a number within the
 // tolerance from one beyond it, a missing field, a new one and a missing message.
 #include "processes/framework/message_json.h"
+#include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 #include "tests/common/temp_dir.h"
 
@@ -17,6 +18,7 @@
 namespace {
 
 namespace lt = lanemap::testing;
+using lanemap::testing::readFile;
 
 const std::string kSource = LANEMAP_SOURCE_DIR;
 const std::string kReplay = std::string(LANEMAP_BIN_DIR) + "/lanemap-replay";
@@ -29,13 +31,6 @@ struct ReplayRun {
 ReplayRun run(const std::string& args) {
   const auto r = lt::runCommand(kReplay + " " + args);
   return {r.exit_code, r.output};
-}
-
-std::string readFile(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
 }
 
 TEST(ProcessReplay, EveryProcessPublishesWhatItsReferenceSays) {

@@ -9,6 +9,7 @@
 #include "lanemap/label_image_t.hpp"
 #include "tests/common/child_process.h"
 #include "tests/common/netns.h"
+#include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 
 #include <gtest/gtest.h>
@@ -63,10 +64,7 @@ struct Labels {
 
 // A config like config/segmenter.yaml with some keys changed.
 std::string writeConfig(const lanemap::testing::TempDir& dir, const std::string& extra) {
-  std::ifstream in(kRoot + "/config/segmenter.yaml");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  YAML::Node c = YAML::Load(ss.str());
+  YAML::Node c = YAML::Load(lanemap::testing::readFile(kRoot + "/config/segmenter.yaml"));
   const YAML::Node e = YAML::Load(extra);
   for (const auto& kv : e) c[kv.first.as<std::string>()] = kv.second;
   std::ofstream out(dir.str("segmenter.yaml"));

@@ -4,6 +4,7 @@
 #include "lanemap/pose_t.hpp"
 #include "processes/framework/pose_conversion.h"
 #include "tests/common/lcm_log.h"
+#include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 
 #include <gtest/gtest.h>
@@ -14,15 +15,9 @@
 #include <sstream>
 
 namespace lt = lanemap::testing;
+using lanemap::testing::readFile;
 
 namespace {
-
-std::string slurp(const std::string& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 std::vector<lanemap::EnuPose> poses(const std::string& dir, const lanemap::geo::LocalFrame& frame) {
   std::vector<lanemap::EnuPose> out;
@@ -48,15 +43,15 @@ TEST(Campaign, TheWorldSeedFixesTheWorldAndEachDriveHasItsOwnOffset) {
     const auto r = lt::runCommand(base + args + " --out " + tmp.str(name));
     ASSERT_EQ(r.exit_code, 0) << name << ": " << r.output;
   }
-  const std::string truth = slurp(tmp.str("alone/groundtruth.osm"));
+  const std::string truth = readFile(tmp.str("alone/groundtruth.osm"));
   ASSERT_GT(truth.size(), 1000u);
-  EXPECT_EQ(slurp(tmp.str("a/groundtruth.osm")), truth);
-  EXPECT_EQ(slurp(tmp.str("b/groundtruth.osm")), truth) << "another drive seed changed the world";
-  EXPECT_NE(slurp(tmp.str("a/drive.lcmlog")), slurp(tmp.str("b/drive.lcmlog")));
+  EXPECT_EQ(readFile(tmp.str("a/groundtruth.osm")), truth);
+  EXPECT_EQ(readFile(tmp.str("b/groundtruth.osm")), truth) << "another drive seed changed the world";
+  EXPECT_NE(readFile(tmp.str("a/drive.lcmlog")), readFile(tmp.str("b/drive.lcmlog")));
 
-  const auto sa = nlohmann::json::parse(slurp(tmp.str("a/scenario.json")));
-  const auto sb = nlohmann::json::parse(slurp(tmp.str("b/scenario.json")));
-  const auto s0 = nlohmann::json::parse(slurp(tmp.str("alone/scenario.json")));
+  const auto sa = nlohmann::json::parse(readFile(tmp.str("a/scenario.json")));
+  const auto sb = nlohmann::json::parse(readFile(tmp.str("b/scenario.json")));
+  const auto s0 = nlohmann::json::parse(readFile(tmp.str("alone/scenario.json")));
   EXPECT_EQ(sa["world_seed"], 3);
   EXPECT_EQ(sb["world_seed"], 3);
   EXPECT_EQ(s0["pose_offset"]["east_m"], 0.0);  // a drive on its own: no offset

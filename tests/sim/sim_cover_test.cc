@@ -5,6 +5,7 @@
 #include "core/config/map_config.h"
 #include "core/mapping/coverage.h"
 #include "core/osm/osm_data.h"
+#include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 #include "tests/common/temp_dir.h"
 
@@ -77,8 +78,7 @@ TEST(SimCover, ASecondDriveFollowsTheCoveragePlanOverRoadsTheFirstDidNotDrive) {
   cov["roads"][0]["to"] = cov["roads"][0]["to"].get<int64_t>() + 1;
   std::ofstream(tmp.str("other.json")) << cov.dump();
   EXPECT_NE(sim("--seed 2 --duration 10 --cover " + tmp.str("other.json") + " --out " + tmp.str("d3"), tmp.str("d3.log")), 0);
-  std::ifstream f(tmp.str("d3.log"));
-  const std::string err((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  const std::string err = lanemap::testing::readFile(tmp.str("d3.log"));
   EXPECT_NE(err.find("another OSM file or map config"), std::string::npos) << err;
   EXPECT_NE(sim("--seed 2 --duration 10 --cover " + tmp.str("cov.json") + " --route 1,2 --out " + tmp.str("d4"), tmp.str("d4.log")), 0)
       << "--cover and --route exclude each other";

@@ -860,6 +860,33 @@ double probeBoundary(const Raster& R, const ExplorerOptions& o, double s, double
   return d + dir * o.default_half_width_m;
 }
 
+// A lane boundary's probes are independent: one that slips through a gap of a dashed line or
+// stops at a speck of noise makes the bound zigzag (Lanelet2's validator: curvature_too_big). A
+// probe whose half-width (distance from the lane's centre line) is more than boundary_outlier_m
+// off the median of its boundary_median_window neighbours takes that median. A real change of
+// width (a lane opening) moves the median with it, so it is kept.
+void rejectBoundaryOutliers(const FrenetFrame& frame, const Lane& lane, const ExplorerOptions& o, Boundary* b) {
+  const int n = static_cast<int>(b->d.size());
+  if (o.boundary_outlier_m <= 0.0 || o.boundary_median_window < 3 || n < 3) return;
+  std::vector<double> width(n);
+  for (int k = 0; k < n; ++k) width[k] = std::abs(b->d[k] - lane.centre.d(lane.waypoint_s[k]));
+  const int half = o.boundary_median_window / 2;
+  std::vector<double> window;
+  for (int k = 0; k < n; ++k) {
+    // The window shifted inside the lane at its ends, so every median sees a whole window.
+    const int w = std::min(half, (n - 1) / 2);
+    const int first = std::clamp(k - w, 0, n - 1 - 2 * w);
+    window.assign(width.begin() + first, width.begin() + first + 2 * w + 1);
+    std::nth_element(window.begin(), window.begin() + w, window.end());
+    const double median = window[w];
+    if (std::abs(width[k] - median) <= o.boundary_outlier_m) continue;
+    const double s = lane.waypoint_s[k];
+    const double d = lane.centre.d(s);
+    b->d[k] = d + (b == &lane.left ? median : -median);
+    b->points[k] = frame.toEnu(s, b->d[k]);
+  }
+}
+
 // Way-points and lane boundaries (METHOD.md section 4, step 5): way-points every
 // waypoint_spacing_m along each lane's centre line, each boundary probed there on both sides
 // (asymmetric, follows the drivable area) and typed by the classes its probes hit most.
@@ -882,6 +909,7 @@ void probeBoundaries(const Raster& R, const FrenetFrame& frame, const ExplorerOp
         ++count[side][hit];
       }
     }
+    for (Boundary* b : {&lane.left, &lane.right}) rejectBoundaryOutliers(frame, lane, o, b);
     for (int side = 0; side < 2; ++side) {
       const int* c = count[side];
       const int paint = c[kSolid] + c[kDashed];

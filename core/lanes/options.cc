@@ -69,6 +69,8 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("waypoint_spacing_m", o.waypoint_spacing_m);
   r.read("probe_max_m", o.probe_max_m);
   r.read("default_half_width_m", o.default_half_width_m);
+  r.read("boundary_outlier_m", o.boundary_outlier_m);
+  r.read("boundary_median_window", o.boundary_median_window);
   try {
     o.validate();
   } catch (const LanesError& e) {
@@ -108,6 +110,8 @@ void ExplorerOptions::validate() const {
   need(bin_m > 0 && break_spacing_m >= bin_m && break_penalty_m2 >= 0, "regression");
   need(waypoint_spacing_m > 0, "waypoint_spacing_m > 0");
   need(probe_max_m > 0 && default_half_width_m > 0, "probing");
+  need(boundary_outlier_m >= 0 && boundary_median_window >= 1 && boundary_median_window % 2 == 1,
+       "boundary_outlier_m >= 0 and an odd boundary_median_window >= 1");
   if (!std::isfinite(v_max) || !std::isfinite(w_max)) throw LanesError("lane explorer options must be finite");
 }
 

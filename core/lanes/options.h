@@ -97,6 +97,11 @@ struct ExplorerOptions {
   // --- boundaries ---
   double probe_max_m = 3.5;              // lateral probing range from the centre line
   double default_half_width_m = 1.75;    // bound where probing finds nothing
+  // A probe whose lane half-width differs by more than this from the median of its
+  // boundary_median_window neighbours along the lane (itself included) is an outlier (a gap in a
+  // dashed line, a speck of noise): it takes that median, so a bound does not zigzag. 0: off.
+  double boundary_outlier_m = 0.5;
+  int boundary_median_window = 5;        // odd
 
   static ExplorerOptions fromYaml(const YAML::Node& node);  // throws LanesError
   // From the `explorer:` section of a config (strict: the caller's finish() refuses other keys);

@@ -79,16 +79,51 @@ BezierConnection bezierConnection(const Vector2d& p0, const Vector2d& t0_in, con
   return c;
 }
 
+namespace {
+
+// The circular arc of a quadratic connection (connectionPolyline): its turn (signed, |turn| < pi),
+// the length of the straight before and after it, and its radius.
+struct Arc {
+  Vector2d t0, t2;
+  double turn = 0.0, tangent = 0.0, radius = 0.0;
+};
+
+Arc arcOf(const BezierConnection& c) {
+  Arc arc;
+  const Vector2d& p0 = c.control[0];
+  const Vector2d& p2 = c.control[2];
+  arc.t0 = unit(c.control[1] - p0, Vector2d::UnitX());
+  arc.t2 = unit(p2 - c.control[1], arc.t0);
+  const double a = (c.control[1] - p0).norm(), b = (p2 - c.control[1]).norm();
+  arc.turn = std::atan2(cross(arc.t0, arc.t2), arc.t0.dot(arc.t2));
+  arc.tangent = std::min(a, b);
+  arc.radius = arc.tangent / std::tan(0.5 * std::abs(arc.turn));
+  return arc;
+}
+
+// A bound of a connection: its arc construction, or, where that arc would turn tighter than
+// min_bound_radius_m (the inside of a sharp turn between lane ends close together), the straight
+// chord between its ends: the inner edge cuts the corner, as a vehicle's swept path does, and
+// the lanelet gets no wider than that on its outer side.
+std::vector<Vector2d> boundPolyline(const Vector2d& p0, const Vector2d& t0, const Vector2d& p2, const Vector2d& t2,
+                                    const CurveOptions& o) {
+  const BezierConnection c = bezierConnection(p0, t0, p2, t2, o);
+  if (c.quadratic && o.min_bound_radius_m > 0.0 && arcOf(c).radius < o.min_bound_radius_m) return {p0, p2};
+  return connectionPolyline(p0, t0, p2, t2, o);
+}
+
+}  // namespace
+
 std::vector<Vector2d> connectionPolyline(const Vector2d& p0, const Vector2d& t0_in, const Vector2d& p2,
                                          const Vector2d& t2_in, const CurveOptions& o) {
   const BezierConnection c = bezierConnection(p0, t0_in, p2, t2_in, o);
   if (!c.quadratic) return c.sample(o.step_m);
-  const Vector2d t0 = unit(c.control[1] - p0, Vector2d::UnitX());
-  const Vector2d t2 = unit(p2 - c.control[1], t0);
-  const double a = (c.control[1] - p0).norm(), b = (p2 - c.control[1]).norm();
-  const double turn = std::atan2(cross(t0, t2), t0.dot(t2));  // signed, |turn| < pi
-  const double tangent = std::min(a, b);
-  const double radius = tangent / std::tan(0.5 * std::abs(turn));
+  const Arc arc = arcOf(c);
+  const Vector2d& t0 = arc.t0;
+  const Vector2d& t2 = arc.t2;
+  const double turn = arc.turn;
+  const double tangent = arc.tangent;
+  const double radius = arc.radius;
   const Vector2d start = c.control[1] - tangent * t0;  // where the arc begins and ends
   const Vector2d end = c.control[1] + tangent * t2;
   const Vector2d normal = turn > 0 ? Vector2d(-t0.y(), t0.x()) : Vector2d(t0.y(), -t0.x());
@@ -117,8 +152,8 @@ ConnectorBounds connectorBounds(const Vector2d& left0, const Vector2d& right0, c
                                 const Vector2d& left2, const Vector2d& right2, const Vector2d& t2,
                                 const CurveOptions& o) {
   ConnectorBounds b;
-  b.left = connectionPolyline(left0, t0, left2, t2, o);
-  b.right = connectionPolyline(right0, t0, right2, t2, o);
+  b.left = boundPolyline(left0, t0, left2, t2, o);
+  b.right = boundPolyline(right0, t0, right2, t2, o);
   return b;
 }
 

@@ -21,6 +21,10 @@ struct CurveOptions {
   double max_control_fraction = 3.0;
   double cubic_handle_fraction = 1.0 / 3.0;  // cubic fallback: handles along the tangents, * chord
   double step_m = 0.5;                       // sampling density
+  // connectorBounds: a bound whose arc would be tighter than this is the straight chord between
+  // its ends instead (Lanelet2's validator warns above curvature 0.5, i.e. under a 2 m radius).
+  // 0: off.
+  double min_bound_radius_m = 2.0;
 };
 
 // A connection from p0 (leaving with heading t0) to p2 (arriving with heading t2).

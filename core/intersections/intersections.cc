@@ -389,8 +389,12 @@ class Builder {
       result_.not_built.push_back({a.road->id, i, d.road->id, o});
       return false;
     }
-    left.id = next_id_++;
-    right.id = next_id_++;
+    // Two connections side by side between lanes that share their border (toLaneMap) share
+    // their border too: the bound of an earlier connection of this intersection with the same ends.
+    const int64_t shared_left = connectorLineBetween(from.left, to.left);
+    const int64_t shared_right = connectorLineBetween(from.right, to.right);
+    left.id = shared_left >= 0 ? shared_left : next_id_++;
+    right.id = shared_right >= 0 ? shared_right : next_id_++;
     ll.id = next_id_++;
     ll.kind = map::LaneletKind::kIntersection;
     ll.left_id = left.id;
@@ -411,10 +415,23 @@ class Builder {
     c.quadratic = curve.quadratic;
     c.orphan = orphan;
     result_.connections.push_back(c);
-    result_.map.lines.push_back(std::move(left));
-    result_.map.lines.push_back(std::move(right));
+    if (shared_left < 0) result_.map.lines.push_back(std::move(left));
+    if (shared_right < 0) result_.map.lines.push_back(std::move(right));
     result_.map.lanelets.push_back(std::move(ll));
     return true;
+  }
+
+  // The bound of a connection built so far in this intersection that runs from `a` to `b` (its
+  // ends within 5 cm, the writer's node merge distance), or -1.
+  int64_t connectorLineBetween(const Vector3d& a, const Vector3d& b) const {
+    for (const auto& line : result_.map.lines) {
+      if (line.points.size() < 2) continue;
+      if ((line.points.front().head<2>() - a.head<2>()).norm() < 0.05 &&
+          (line.points.back().head<2>() - b.head<2>()).norm() < 0.05) {
+        return line.id;
+      }
+    }
+    return -1;
   }
 
   const skeleton::Skeleton& sk_;
@@ -548,6 +565,7 @@ IntersectionOptions IntersectionOptions::fromYaml(const config::YamlReader& r) {
   r.read("max_control_fraction", o.curve.max_control_fraction);
   r.read("cubic_handle_fraction", o.curve.cubic_handle_fraction);
   r.read("step_m", o.curve.step_m);
+  r.read("min_bound_radius_m", o.curve.min_bound_radius_m);
   r.read("id_base", o.id_base);
   try {
     o.validate();
@@ -573,6 +591,7 @@ void IntersectionOptions::validate() const {
         "need 0 <= min_control_fraction < max_control_fraction");
   check(curve.cubic_handle_fraction > 0.0 && curve.cubic_handle_fraction <= 1.0, "cubic_handle_fraction must be in (0, 1]");
   check(curve.step_m > 0.0, "step_m must be > 0");
+  check(curve.min_bound_radius_m >= 0.0, "min_bound_radius_m must be >= 0");
   check(id_base >= 0, "id_base must be >= 0");
 }
 

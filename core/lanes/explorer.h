@@ -135,9 +135,25 @@ RoadGeometry explorationStretch(const RoadGeometry& road, double length, const E
 ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road, const ExplorerOptions& options,
                               const std::optional<EgoPose>& ego = std::nullopt, int history_stride = 0);
 
+// Two lanes of one road that run side by side over [s_begin, s_end] with the right bound of lane
+// `left` on the left bound of lane `right` (their probes found the same line).
+struct LaneNeighbours {
+  int left = -1, right = -1;  // indices in ExplorationResult::lanes
+  double s_begin = 0.0, s_end = 0.0;
+};
+struct LaneNeighbourOptions {
+  double tolerance_m = 0.3;    // the two bounds' offsets differ by at most this ...
+  double min_fraction = 0.8;   // ... at this share of the samples of their common stretch
+  double min_overlap_m = 2.0;  // a common stretch shorter than this is not a neighbourhood
+  double sample_m = 1.0;
+};
+std::vector<LaneNeighbours> laneNeighbours(const ExplorationResult& result, const LaneNeighbourOptions& options = {});
+
 // The road's lanes as Lanelet2 lanelets (map::LaneMap): one lanelet per lane piece between split
 // and merge points, left/right LineStrings typed by the probed marking, successors at splits and
-// merges. Ids: (road_id + 1) * 100000 + k, so the roads of one map never collide.
+// merges. Neighbouring lanes (laneNeighbours) are pieced at the same s over their common stretch
+// and share one border line string there (halfway between their probes; typed by the stronger
+// marking either saw), so Lanelet2's routing graph sees them as neighbours. Ids: (road_id + 1) * 100000 + k, so the roads of one map never collide.
 map::LaneMap toLaneMap(const ExplorationResult& result, double origin_lat = 0.0, double origin_lon = 0.0,
                        double origin_alt = 0.0);
 

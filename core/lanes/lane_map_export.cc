@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 namespace lanemap::lanes {
 
@@ -17,7 +20,46 @@ double interp(const std::vector<double>& xs, const std::vector<double>& ys, doub
   return ys[i] + t * (ys[i + 1] - ys[i]);
 }
 
+// A lane boundary's offset at s (its probes, linearly interpolated; the end values beyond them).
+double boundaryD(const Lane& l, const Boundary& b, double s) { return interp(l.waypoint_s, b.d, s); }
+
+// The type of a border two lanes share, from what each lane's probes found there: paint wins over
+// no paint, solid over dashed (crossing it is not allowed when either side saw a solid line).
+map::LineType sharedType(map::LineType a, map::LineType b) {
+  using map::LineType;
+  if (a == b) return a;
+  for (LineType t : {LineType::kSolidSolid, LineType::kSolid, LineType::kDashed, LineType::kCurb}) {
+    if (a == t || b == t) return t;
+  }
+  return a;
+}
+
 }  // namespace
+
+std::vector<LaneNeighbours> laneNeighbours(const ExplorationResult& r, const LaneNeighbourOptions& o) {
+  std::vector<LaneNeighbours> out;
+  for (size_t i = 0; i < r.lanes.size(); ++i) {
+    for (size_t j = 0; j < r.lanes.size(); ++j) {
+      if (i == j) continue;
+      const Lane& left = r.lanes[i];
+      const Lane& right = r.lanes[j];
+      const double a = std::max(left.s_begin, right.s_begin), b = std::min(left.s_end, right.s_end);
+      if (!(b - a >= o.min_overlap_m)) continue;
+      const int n = std::max(2, static_cast<int>(std::ceil((b - a) / o.sample_m)) + 1);
+      int on = 0;
+      for (int k = 0; k < n; ++k) {
+        const double s = a + (b - a) * k / (n - 1);
+        if (left.dAt(s) <= right.dAt(s)) {  // `right` must lie right of `left` all along
+          on = -1;
+          break;
+        }
+        if (std::abs(boundaryD(left, left.right, s) - boundaryD(right, right.left, s)) <= o.tolerance_m) ++on;
+      }
+      if (on >= o.min_fraction * n) out.push_back({static_cast<int>(i), static_cast<int>(j), a, b});
+    }
+  }
+  return out;
+}
 
 map::LaneMap toLaneMap(const ExplorationResult& r, double lat, double lon, double alt) {
   map::LaneMap out;
@@ -37,23 +79,125 @@ map::LaneMap toLaneMap(const ExplorationResult& r, double lat, double lon, doubl
     if (l.split_from >= 0) addCut(l.split_from, l.s_begin);
     if (l.merges_into >= 0) addCut(l.merges_into, l.s_end);
   }
+  // Two neighbouring lanes share one border line string (Lanelet2 and Autoware: a lane change is
+  // possible only between lanelets with a common bound), so their pieces must begin and end at
+  // the same s over the stretch they run side by side: each takes the other's cuts there.
+  const std::vector<LaneNeighbours> neighbours = laneNeighbours(r);
+  for (const auto& nb : neighbours) {
+    addCut(nb.left, nb.s_begin);
+    addCut(nb.left, nb.s_end);
+    addCut(nb.right, nb.s_begin);
+    addCut(nb.right, nb.s_end);
+  }
+  for (size_t pass = 0; pass <= r.lanes.size(); ++pass) {  // until no cut is new (chains of lanes)
+    bool added = false;
+    for (const auto& nb : neighbours) {
+      for (const auto& [from, to] : {std::pair{nb.left, nb.right}, std::pair{nb.right, nb.left}}) {
+        const std::vector<double> theirs = cuts[from];
+        for (double s : theirs) {
+          if (s <= nb.s_begin + 1.0 || s >= nb.s_end - 1.0) continue;
+          const bool known = std::any_of(cuts[to].begin(), cuts[to].end(), [&](double c) { return std::abs(c - s) < 1.0; });
+          if (!known) {
+            addCut(to, s);
+            added = true;
+          }
+        }
+      }
+    }
+    if (!added) break;
+  }
+  for (size_t i = 0; i < r.lanes.size(); ++i) {
+    auto& c = cuts[i];
+    std::sort(c.begin(), c.end());
+    c.erase(std::unique(c.begin(), c.end(), [](double a, double b) { return std::abs(a - b) < 1.0; }), c.end());
+    if (c.size() < 2) c = {r.lanes[i].s_begin, r.lanes[i].s_end};
+  }
+  // Where two neighbours' cuts are within 1 m of each other, both take the same one (the left
+  // lane's), so that their shared border ends exactly where each piece's other bound ends (Lanelet2
+  // joins a lanelet to its successor by their bounds' common end points).
+  for (size_t pass = 0; pass <= r.lanes.size(); ++pass) {
+    bool moved = false;
+    for (const auto& nb : neighbours) {
+      for (double& c : cuts[nb.right]) {
+        if (c < nb.s_begin - 1.0 || c > nb.s_end + 1.0) continue;
+        for (double l : cuts[nb.left]) {
+          if (std::abs(l - c) < 1.0 && l != c) {
+            c = l;
+            moved = true;
+          }
+        }
+      }
+    }
+    if (!moved) break;
+  }
+  // A lane's bound offset at s: halfway between its probes and its neighbour's where the two share
+  // the border, its own probes elsewhere. Every piece and every shared line takes its points from
+  // here, so a bound runs on without a jump where it becomes or stops being shared.
+  const auto boundAt = [&](int lane, bool right_side, double s) -> double {
+    for (const auto& nb : neighbours) {
+      if ((right_side ? nb.left : nb.right) != lane || s < nb.s_begin - 1.0 || s > nb.s_end + 1.0) continue;
+      const Lane& ll = r.lanes[nb.left];
+      const Lane& rl = r.lanes[nb.right];
+      return 0.5 * (boundaryD(ll, ll.right, s) + boundaryD(rl, rl.left, s));
+    }
+    const Lane& l = r.lanes[lane];
+    return boundaryD(l, right_side ? l.right : l.left, s);
+  };
+  // The piece k of `lane` that spans [a, b] (its ends within 1 m), if there is one.
+  const auto pieceOf = [&](int lane, double a, double b) -> int {
+    const auto& c = cuts[lane];
+    for (size_t k = 0; k + 1 < c.size(); ++k) {
+      if (std::abs(c[k] - a) < 1.0 && std::abs(c[k + 1] - b) < 1.0) return static_cast<int>(k);
+    }
+    return -1;
+  };
+  // The border that piece [a, b] of `lane` shares with its neighbour on one side: made once, by
+  // whichever of the two lanes comes first, at the left lane's way-points, halfway between the two
+  // lanes' probes of it. -1: no neighbour there with a piece over the same stretch.
+  std::map<std::tuple<int, int, int>, int64_t> shared_line;  // (left lane, right lane, its piece) -> line
+  const auto sharedBorder = [&](int lane, bool on_right, double a, double b) -> int64_t {
+    for (const auto& nb : neighbours) {
+      if ((on_right ? nb.left : nb.right) != lane) continue;
+      if (a < nb.s_begin - 1.0 || b > nb.s_end + 1.0) continue;
+      const int k = pieceOf(nb.left, a, b);
+      if (k < 0 || pieceOf(nb.right, a, b) < 0) continue;
+      const auto key = std::tuple{nb.left, nb.right, k};
+      if (const auto it = shared_line.find(key); it != shared_line.end()) return it->second;
+      const Lane& ll = r.lanes[nb.left];
+      const Lane& rl = r.lanes[nb.right];
+      const double from = cuts[nb.left][k], to = cuts[nb.left][k + 1];
+      map::LineString line;
+      line.id = next++;
+      line.type = sharedType(ll.right.type, rl.left.type);
+      std::vector<double> ss{from};
+      for (double s : ll.waypoint_s) if (s > from + 0.2 && s < to - 0.2) ss.push_back(s);
+      ss.push_back(to);
+      for (double s : ss) {
+        const Eigen::Vector2d p = r.frame->toEnu(s, boundAt(nb.left, true, s));
+        line.points.emplace_back(p.x(), p.y(), 0.0);
+      }
+      shared_line[key] = line.id;
+      out.lines.push_back(std::move(line));
+      return shared_line[key];
+    }
+    return -1;
+  };
   // piece ids per lane: (start s, lanelet id)
   std::vector<std::vector<std::pair<double, int64_t>>> pieces(r.lanes.size());
   std::map<int64_t, size_t> pos;
   for (size_t i = 0; i < r.lanes.size(); ++i) {
     const Lane& l = r.lanes[i];
-    auto& c = cuts[i];
-    std::sort(c.begin(), c.end());
-    c.erase(std::unique(c.begin(), c.end(), [](double a, double b) { return std::abs(a - b) < 1.0; }), c.end());
-    if (c.size() < 2) c = {l.s_begin, l.s_end};
+    const auto& c = cuts[i];
     for (size_t k = 0; k + 1 < c.size(); ++k) {
       const double a = c[k], b = c[k + 1];
       std::vector<double> ss{a};
       for (double s : l.waypoint_s) if (s > a + 0.2 && s < b - 0.2) ss.push_back(s);
       ss.push_back(b);
+      const int64_t shared_left = sharedBorder(static_cast<int>(i), false, a, b);
+      const int64_t shared_right = sharedBorder(static_cast<int>(i), true, a, b);
       map::LineString left, right;
-      left.id = next++;
-      right.id = next++;
+      if (shared_left < 0) left.id = next++;
+      if (shared_right < 0) right.id = next++;
       left.type = l.left.type;
       right.type = l.right.type;
       map::Lanelet ll;
@@ -63,18 +207,18 @@ map::LaneMap toLaneMap(const ExplorationResult& r, double lat, double lon, doubl
       ll.from_node = r.from_node;
       ll.to_node = r.to_node;
       ll.index_from_left = l.index_from_left;
-      ll.left_id = left.id;
-      ll.right_id = right.id;
+      ll.left_id = shared_left >= 0 ? shared_left : left.id;
+      ll.right_id = shared_right >= 0 ? shared_right : right.id;
       for (double s : ss) {
-        const double dl = interp(l.waypoint_s, l.left.d, s), dr = interp(l.waypoint_s, l.right.d, s);
+        const double dl = boundAt(static_cast<int>(i), false, s), dr = boundAt(static_cast<int>(i), true, s);
         const Eigen::Vector2d pl = r.frame->toEnu(s, dl), pr = r.frame->toEnu(s, dr), pc = r.frame->toEnu(s, l.centre.d(s));
         left.points.emplace_back(pl.x(), pl.y(), 0.0);
         right.points.emplace_back(pr.x(), pr.y(), 0.0);
         ll.centre.emplace_back(pc.x(), pc.y(), 0.0);
       }
       pieces[i].push_back({a, ll.id});
-      out.lines.push_back(std::move(left));
-      out.lines.push_back(std::move(right));
+      if (shared_left < 0) out.lines.push_back(std::move(left));
+      if (shared_right < 0) out.lines.push_back(std::move(right));
       pos[ll.id] = out.lanelets.size();
       out.lanelets.push_back(std::move(ll));
     }

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdio>
+#include <map>
 #include <set>
 
 namespace {
@@ -190,6 +191,21 @@ TEST(Explorer, SplitIntoTurnPocket) {
   int forks = 0;
   for (const auto& ll : m.lanelets) forks += ll.successors.size() == 2;
   EXPECT_EQ(forks, 1);
+  // Neighbours share their border, so Lanelet2 routes lane changes between them: the two lanes
+  // before the pocket, and beside it the pocket and the left lane's second piece (cut where the
+  // pocket starts, so that both pieces span the same stretch) and the two through lanes.
+  std::map<int64_t, int> as_left, as_right;  // line -> lanelets with it as that bound
+  for (const auto& ll : m.lanelets) {
+    ++as_left[ll.left_id];
+    ++as_right[ll.right_id];
+  }
+  int shared = 0;
+  for (const auto& [line, n] : as_right) {
+    EXPECT_EQ(n, 1) << "line " << line << " is the right bound of two lanelets";
+    shared += as_left.count(line) ? as_left.at(line) : 0;
+  }
+  EXPECT_EQ(shared, 3) << "lanelets " << m.lanelets.size() << ", lines " << m.lines.size();
+  EXPECT_EQ(m.lines.size(), 2 * m.lanelets.size() - 3);
 }
 
 TEST(Explorer, BusBay) {
@@ -265,6 +281,22 @@ TEST(Explorer, LaneMapExport) {
   const map::LaneMap m = toLaneMap(rep.result);
   ASSERT_EQ(m.lanelets.size(), 3u);
   EXPECT_TRUE(io::orientationProblems(m).empty());
+  // Three lanes side by side: four line strings, the two dashed lines each shared by the lanes on
+  // either side (the right bound of one is the left bound of the next, as Lanelet2 needs for a
+  // lane change), halfway between the two lanes' probes of it.
+  EXPECT_EQ(m.lines.size(), 4u);
+  std::map<int, const map::Lanelet*> by_index;
+  for (const auto& ll : m.lanelets) by_index[ll.index_from_left] = &ll;
+  ASSERT_EQ(by_index.size(), 3u);
+  EXPECT_EQ(by_index[0]->right_id, by_index[1]->left_id);
+  EXPECT_EQ(by_index[1]->right_id, by_index[2]->left_id);
+  EXPECT_NE(by_index[0]->left_id, by_index[2]->right_id);
+  EXPECT_EQ(m.line(by_index[0]->right_id)->type, map::LineType::kDashed);
+  for (const auto& nb : laneNeighbours(rep.result)) {
+    EXPECT_LT(nb.s_end - nb.s_begin, 151.0);
+    EXPECT_GT(nb.s_end - nb.s_begin, 100.0) << "lanes " << nb.left << " and " << nb.right;
+  }
+  EXPECT_EQ(laneNeighbours(rep.result).size(), 2u);
   std::set<int64_t> ids;
   for (const auto& ll : m.lanelets) {
     EXPECT_EQ(ll.road_id, 7);

@@ -122,6 +122,39 @@ TEST(IntersectionCurve, ControlPointBehindAnEndFallsBackToACubic) {
   EXPECT_NEAR(c.derivative(1.0).normalized().dot(Vector2d(0, 1)), 1.0, 1e-12);
 }
 
+// Menger curvature at each interior point of a polyline, the largest (Lanelet2's validator warns
+// above 0.5 on a lanelet bound).
+double maxCurvature(const std::vector<Vector2d>& p) {
+  double k = 0.0;
+  for (size_t i = 1; i + 1 < p.size(); ++i) {
+    const Vector2d a = p[i] - p[i - 1], b = p[i + 1] - p[i];
+    const double area2 = std::abs(a.x() * b.y() - a.y() * b.x());
+    k = std::max(k, 2.0 * area2 / (a.norm() * b.norm() * (p[i + 1] - p[i - 1]).norm()));
+  }
+  return k;
+}
+
+TEST(IntersectionCurve, ABoundTighterThanTwoMetresIsTheChordBetweenItsEnds) {
+  // A left turn between lane ends 3 m apart (arizona's SPUI): the centre's arc has a 2.6 m
+  // radius, the inner (left) bound's would have 0.9 m, curvature 1.1: it becomes the chord, the
+  // outer bound stays an arc; no bound is then tighter than Lanelet2's limit.
+  const Vector2d c0(0, 0), t0(1, 0), c2(2.6, 2.6), t2(0, 1);
+  const Vector2d n0(0, 1.7), n2(-1.7, 0);
+  lanemap::intersections::CurveOptions o;
+  const auto b = lanemap::intersections::connectorBounds(c0 + n0, c0 - n0, t0, c2 + n2, c2 - n2, t2, o);
+  ASSERT_EQ(b.left.size(), 2u);
+  EXPECT_EQ(b.left.front(), c0 + n0);
+  EXPECT_EQ(b.left.back(), c2 + n2);
+  EXPECT_GT(b.right.size(), 5u);
+  EXPECT_LT(maxCurvature(b.right), 0.5);
+  // Without the rule the inner bound is the tight arc the validator warns about.
+  o.min_bound_radius_m = 0.0;
+  const auto arc = lanemap::intersections::connectorBounds(c0 + n0, c0 - n0, t0, c2 + n2, c2 - n2, t2, o);
+  EXPECT_GT(arc.left.size(), 3u);
+  EXPECT_GT(maxCurvature(arc.left), 1.0);
+  EXPECT_EQ(arc.right, b.right);
+}
+
 TEST(IntersectionCurve, BoundsOfASharpTurnStayOnTheirSides) {
   // A right turn on a tiny junction: the centre turns 90 degrees within ~2 m, a radius below the
   // 1.75 m half lane width, where an offset of the centre curve folds the inner bound back.

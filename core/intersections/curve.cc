@@ -101,15 +101,29 @@ Arc arcOf(const BezierConnection& c) {
   return arc;
 }
 
-// A bound of a connection: its arc construction, or, where that arc would turn tighter than
-// min_bound_radius_m (the inside of a sharp turn between lane ends close together), the straight
-// chord between its ends: the inner edge cuts the corner, as a vehicle's swept path does, and
-// the lanelet gets no wider than that on its outer side.
-std::vector<Vector2d> boundPolyline(const Vector2d& p0, const Vector2d& t0, const Vector2d& p2, const Vector2d& t2,
-                                    const CurveOptions& o) {
-  const BezierConnection c = bezierConnection(p0, t0, p2, t2, o);
-  if (c.quadratic && o.min_bound_radius_m > 0.0 && arcOf(c).radius < o.min_bound_radius_m) return {p0, p2};
-  return connectionPolyline(p0, t0, p2, t2, o);
+// The largest curvature of a polyline at its interior points: 1 / the radius of the circle
+// through each point and its two neighbours (what Lanelet2's validator computes on a bound).
+double maxCurvature(const std::vector<Vector2d>& p) {
+  double k = 0.0;
+  for (size_t i = 1; i + 1 < p.size(); ++i) {
+    const Vector2d a = p[i] - p[i - 1], b = p[i + 1] - p[i], c = p[i + 1] - p[i - 1];
+    const double denom = a.norm() * b.norm() * c.norm();
+    if (denom > 1e-12) k = std::max(k, 2.0 * std::abs(cross(a, b)) / denom);
+  }
+  return k;
+}
+
+// Whether the polyline turns one way only (no S bend): its chord then lies on the inner side of it.
+bool turnsOneWay(const std::vector<Vector2d>& p) {
+  int sign = 0;
+  for (size_t i = 1; i + 1 < p.size(); ++i) {
+    const double c = cross(p[i] - p[i - 1], p[i + 1] - p[i]);
+    if (std::abs(c) < 1e-9) continue;
+    const int s = c > 0 ? 1 : -1;
+    if (sign != 0 && s != sign) return false;
+    sign = s;
+  }
+  return true;
 }
 
 }  // namespace
@@ -150,10 +164,32 @@ std::vector<Vector2d> connectionPolyline(const Vector2d& p0, const Vector2d& t0_
 
 ConnectorBounds connectorBounds(const Vector2d& left0, const Vector2d& right0, const Vector2d& t0,
                                 const Vector2d& left2, const Vector2d& right2, const Vector2d& t2,
-                                const CurveOptions& o) {
+                                const CurveOptions& o, const std::vector<Vector2d>* centre) {
   ConnectorBounds b;
-  b.left = boundPolyline(left0, t0, left2, t2, o);
-  b.right = boundPolyline(right0, t0, right2, t2, o);
+  b.left = connectionPolyline(left0, t0, left2, t2, o);
+  b.right = connectionPolyline(right0, t0, right2, t2, o);
+  if (o.min_bound_radius_m <= 0.0) return b;
+  // A bound that turns tighter than min_bound_radius_m somewhere (the inside of a sharp turn
+  // between lane ends close together: a quadratic's arc, a cubic's hook at an end) is the straight
+  // chord between its ends: the edge cuts the corner, as a vehicle's swept path does. A bound
+  // that turns one way has its chord on its inner side; one with an S bend only where the chord
+  // leaves the outline simple and does not cross the centre line, so the lanelet stays one that
+  // Lanelet2 reads the right way round.
+  for (const bool left : {true, false}) {
+    std::vector<Vector2d>& side = left ? b.left : b.right;
+    if (side.size() <= 2 || maxCurvature(side) <= 1.0 / o.min_bound_radius_m) continue;
+    const std::vector<Vector2d> chord{side.front(), side.back()};
+    if (turnsOneWay(side)) {
+      side = chord;
+      continue;
+    }
+    if (!(left ? outlineIsSimple(chord, b.right) : outlineIsSimple(b.left, chord))) continue;
+    bool crosses = false;
+    for (size_t i = 0; centre && i + 1 < centre->size() && !crosses; ++i) {
+      crosses = segmentsCross(chord[0], chord[1], (*centre)[i], (*centre)[i + 1]);
+    }
+    if (!crosses) side = chord;
+  }
   return b;
 }
 

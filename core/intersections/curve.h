@@ -21,9 +21,9 @@ struct CurveOptions {
   double max_control_fraction = 3.0;
   double cubic_handle_fraction = 1.0 / 3.0;  // cubic fallback: handles along the tangents, * chord
   double step_m = 0.5;                       // sampling density
-  // connectorBounds: a bound whose arc would be tighter than this is the straight chord between
-  // its ends instead (Lanelet2's validator warns above curvature 0.5, i.e. under a 2 m radius).
-  // 0: off.
+  // connectorBounds: a bound turning tighter than this somewhere is the straight chord between
+  // its ends instead, where that chord leaves the lanelet sound (Lanelet2's validator warns above
+  // curvature 0.5, i.e. under a 2 m radius). 0: off.
   double min_bound_radius_m = 2.0;
 };
 
@@ -56,14 +56,17 @@ std::vector<Eigen::Vector2d> connectionPolyline(const Eigen::Vector2d& p0, const
 // bound end points (left0, right0), leaving with heading t0, to the out-lane's bound start points
 // (left2, right2), arriving with heading t2. They meet the road lanelets' bounds exactly and never
 // loop back, which offsets of a tight centre curve do wherever the offset exceeds the curve's
-// radius (the inner bound of a sharp turn on a small junction).
+// radius (the inner bound of a sharp turn on a small junction). A bound tighter than
+// options.min_bound_radius_m is its chord where the outline stays simple and the chord does not
+// cross `centre` (the lanelet's centre line, when given).
 struct ConnectorBounds {
   std::vector<Eigen::Vector2d> left, right;
 };
 ConnectorBounds connectorBounds(const Eigen::Vector2d& left0, const Eigen::Vector2d& right0,
                                 const Eigen::Vector2d& t0, const Eigen::Vector2d& left2,
                                 const Eigen::Vector2d& right2, const Eigen::Vector2d& t2,
-                                const CurveOptions& options = {});
+                                const CurveOptions& options = {},
+                                const std::vector<Eigen::Vector2d>* centre = nullptr);
 
 // Signed heading change from t_in to t_out in (-pi, pi], counter-clockwise positive (left).
 double headingChange(const Eigen::Vector2d& t_in, const Eigen::Vector2d& t_out);

@@ -363,7 +363,7 @@ class Builder {
     const std::vector<Vector2d> pts =
         connectionPolyline(from.centre.head<2>(), from.tangent, to.centre.head<2>(), to.tangent, o_.curve);
     const ConnectorBounds bounds = connectorBounds(from.left.head<2>(), from.right.head<2>(), from.tangent,
-                                                   to.left.head<2>(), to.right.head<2>(), to.tangent, o_.curve);
+                                                   to.left.head<2>(), to.right.head<2>(), to.tangent, o_.curve, &pts);
     // Heights run linearly in arc length from the in-lane's end to the out-lane's start.
     const auto lift = [](const std::vector<Vector2d>& p, double z0, double z1) {
       std::vector<double> u(p.size(), 0.0);

@@ -47,15 +47,24 @@ std::vector<LaneNeighbours> laneNeighbours(const ExplorationResult& r, const Lan
       if (!(b - a >= o.min_overlap_m)) continue;
       const int n = std::max(2, static_cast<int>(std::ceil((b - a) / o.sample_m)) + 1);
       int on = 0;
+      double first = INFINITY, last = -INFINITY;  // the first and last sample where the bounds agree
       for (int k = 0; k < n; ++k) {
         const double s = a + (b - a) * k / (n - 1);
         if (left.dAt(s) <= right.dAt(s)) {  // `right` must lie right of `left` all along
           on = -1;
           break;
         }
-        if (std::abs(boundaryD(left, left.right, s) - boundaryD(right, right.left, s)) <= o.tolerance_m) ++on;
+        if (std::abs(boundaryD(left, left.right, s) - boundaryD(right, right.left, s)) <= o.tolerance_m) {
+          ++on;
+          first = std::min(first, s);
+          last = std::max(last, s);
+        }
       }
-      if (on >= o.min_fraction * n) out.push_back({static_cast<int>(i), static_cast<int>(j), a, b});
+      // Shared from the first to the last place they agree: where one lane tapers off beside the
+      // other their probes part, and a border halfway between them would jump at its end.
+      if (on >= o.min_fraction * n && last - first >= o.min_overlap_m) {
+        out.push_back({static_cast<int>(i), static_cast<int>(j), first, last});
+      }
     }
   }
   return out;
@@ -132,16 +141,24 @@ map::LaneMap toLaneMap(const ExplorationResult& r, double lat, double lon, doubl
   }
   // A lane's bound offset at s: halfway between its probes and its neighbour's where the two share
   // the border, its own probes elsewhere. Every piece and every shared line takes its points from
-  // here, so a bound runs on without a jump where it becomes or stops being shared.
+  // here, so a bound runs on without a break where it becomes or stops being shared.
+  // Within kBlendM of the shared stretch the lane's own probes blend into it linearly, so the
+  // bound does not step sideways where its sharing begins or ends.
+  constexpr double kBlendM = 4.0;
   const auto boundAt = [&](int lane, bool right_side, double s) -> double {
+    const Lane& l = r.lanes[lane];
+    const double own = boundaryD(l, right_side ? l.right : l.left, s);
     for (const auto& nb : neighbours) {
-      if ((right_side ? nb.left : nb.right) != lane || s < nb.s_begin - 1.0 || s > nb.s_end + 1.0) continue;
+      if ((right_side ? nb.left : nb.right) != lane) continue;
+      const double outside = std::max(nb.s_begin - 1.0 - s, s - nb.s_end - 1.0);  // <= 0: shared here
+      if (outside >= kBlendM) continue;
       const Lane& ll = r.lanes[nb.left];
       const Lane& rl = r.lanes[nb.right];
-      return 0.5 * (boundaryD(ll, ll.right, s) + boundaryD(rl, rl.left, s));
+      const double shared = 0.5 * (boundaryD(ll, ll.right, s) + boundaryD(rl, rl.left, s));
+      const double w = outside <= 0.0 ? 1.0 : 1.0 - outside / kBlendM;
+      return own + w * (shared - own);
     }
-    const Lane& l = r.lanes[lane];
-    return boundaryD(l, right_side ? l.right : l.left, s);
+    return own;
   };
   // The piece k of `lane` that spans [a, b] (its ends within 1 m), if there is one.
   const auto pieceOf = [&](int lane, double a, double b) -> int {

@@ -1353,7 +1353,7 @@ class Builder {
     const auto curve = intersections::bezierConnection(a.centre, a.tangent, b.centre, b.tangent, curve_options)
                            .sample(curve_options.step_m);
     const auto bounds = intersections::connectorBounds(a.left, a.right, a.tangent, b.left, b.right, b.tangent,
-                                                       curve_options);
+                                                       curve_options, &curve);
     const auto& left = bounds.left;
     const auto& right = bounds.right;
     auto lift = [&](const std::vector<Vector2d>& pts) {

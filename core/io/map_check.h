@@ -9,7 +9,8 @@
 //                     another (two lanes of one direction) has lane_change=yes|no, yes exactly on
 //                     dashed lines (line_thin/line_thick subtype dashed)
 //   shared_borders    neighbouring lanelets share their border: no two different line strings of
-//                     two lanelets run on top of each other (within 0.1 m for 90 % of the shorter)
+//                     two lanelets run on top of each other (within 0.1 m for 90 % of the shorter);
+//                     crosswalk and walkway lanelets are not lanes' neighbours and do not count
 //   bounds_apart      a lanelet's left and right bound share no node
 //   centerline_inside every point of a lanelet's centerline lies inside its lanelet (0.1 m slack)
 //   one_lanelet_per_intersection_path  (lanemap sidecar) no intersection lanelet is followed by

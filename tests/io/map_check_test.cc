@@ -218,6 +218,17 @@ TEST(MapCheck, RegulatoryElementsAndCrosswalks) {
     std::ofstream(p) << text;
     return p;
   };
+  {  // a crosswalk whose edge runs on lanelet 101's curb for 10 m (a crossing of a side street
+     // beside the lane): crosswalks lie across lanes by design and are no lane's neighbour
+    LaneMap m = ruledMap();
+    map::Crosswalk c;
+    c.id = 301;
+    c.left = alongX(30, 40, -3.5, 3);
+    c.right = alongX(30, 40, -6.5, 3);
+    m.crosswalks.push_back(c);
+    writeLanelet2(m, dir.str("side_crossing.osm"));
+    EXPECT_EQ(failures(dir.str("side_crossing.osm")), Failures{});
+  }
   {  // the light's ref_line is not a stop line (curb 3 instead of stop line 6)
     std::string t = good;
     replaceOnce(t, "ref=\"6\" role=\"ref_line\"", "ref=\"3\" role=\"ref_line\"");

@@ -103,6 +103,12 @@ size_t addStopLines(const bev::BevGrid& grid, map::LaneMap& m, const StopLineOpt
         used[b] = true;
       }
     }
+    // Across the group from its leftmost lane's left end to its rightmost lane's right end, by
+    // where the lanes are (index_from_left is counted at each lane's middle: two lanes of a road
+    // that end side by side can share it).
+    const Eigen::Vector2d to_left(-found[a].dir.y(), found[a].dir.x());
+    const auto lateral = [&](size_t g) { return (0.5 * (found[g].left + found[g].right)).head<2>().dot(to_left); };
+    std::stable_sort(group.begin(), group.end(), [&](size_t x, size_t y) { return lateral(x) > lateral(y); });
     map::LineString line;
     line.id = next_id++;
     line.type = map::LineType::kStopLine;

@@ -60,6 +60,22 @@ TEST(StopLines, BarAcrossBothLanesIsOneStopLineAtItsMiddle) {
   EXPECT_GT(s.id, 11);  // a fresh id
 }
 
+TEST(StopLines, SpansTheLanesByWhereTheyAreNotByTheirIndex) {
+  // index_from_left is counted at each lane's middle: two lanes ending side by side can carry it
+  // the wrong way round (or the same). The stop line still runs from the left lane's left bound
+  // to the right lane's right bound (it was a point where the two share their border: Lanelet2's
+  // points_too_close on the demo drive).
+  Road r;
+  r.m.lanelets[0].index_from_left = 1;
+  r.m.lanelets[1].index_from_left = 0;
+  r.paint(36.8, 37.2, -3.5, 3.5, bev::Layer::kStopLine, 4);
+  ASSERT_EQ(addStopLines(r.grid, r.m), 1u);
+  const map::LineString& s = r.m.lines.back();
+  ASSERT_EQ(s.points.size(), 2u);
+  EXPECT_NEAR(s.points[0].y(), 3.5, 1e-9);
+  EXPECT_NEAR(s.points[1].y(), -3.5, 1e-9);
+}
+
 TEST(StopLines, BarOverOneLaneIsThatLanesOnly) {
   Road r;
   r.paint(30.0, 30.4, -3.5, 0.0, bev::Layer::kStopLine, 5);

@@ -226,4 +226,24 @@ bool outlineIsSimple(const std::vector<Vector2d>& left, const std::vector<Vector
   return true;
 }
 
+bool centreLeavesOutline(const std::vector<Vector2d>& centre, const std::vector<Vector2d>& left,
+                         const std::vector<Vector2d>& right) {
+  if (centre.size() < 2 || left.size() < 2 || right.size() < 2) return false;
+  const size_t last = centre.size() - 2;  // the centre's last segment
+  for (size_t i = 0; i + 1 < centre.size(); ++i) {
+    for (const auto* bound : {&left, &right}) {
+      for (size_t j = 0; j + 1 < bound->size(); ++j) {
+        // The centre's first and last segments may touch the bounds' first and last ones where the
+        // lane ends are narrow (a U-turn's inner bound): only a crossing further in counts.
+        const bool at_start = i == 0 && j == 0, at_end = i == last && j + 2 == bound->size();
+        if (!at_start && !at_end && segmentsCross(centre[i], centre[i + 1], (*bound)[j], (*bound)[j + 1])) return true;
+      }
+    }
+    // The centre's first and last points lie on the lanelet's ends, between the bounds' ends.
+    if (i != 0 && segmentsCross(centre[i], centre[i + 1], left.front(), right.front())) return true;
+    if (i != last && segmentsCross(centre[i], centre[i + 1], left.back(), right.back())) return true;
+  }
+  return false;
+}
+
 }  // namespace lanemap::intersections

@@ -81,4 +81,10 @@ bool selfIntersects(const std::vector<Eigen::Vector2d>& pts);
 // simple polygon: no bound crosses itself or the other one.
 bool outlineIsSimple(const std::vector<Eigen::Vector2d>& left, const std::vector<Eigen::Vector2d>& right);
 
+// True when the centre line leaves the lanelet's outline: it crosses a bound, or the segment
+// across the lanelet's start or end anywhere but at its own first or last point (a connection
+// whose centre hooks past lane ends that nearly overlap).
+bool centreLeavesOutline(const std::vector<Eigen::Vector2d>& centre, const std::vector<Eigen::Vector2d>& left,
+                         const std::vector<Eigen::Vector2d>& right);
+
 }  // namespace lanemap::intersections

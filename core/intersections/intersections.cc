@@ -385,7 +385,8 @@ class Builder {
     left.points.back() = to.left;
     right.points.front() = from.right;
     right.points.back() = to.right;
-    if (!io::orientationProblem(ll, left, right).empty()) {
+    // Nor one whose centre line leaves its lanelet (lane ends that nearly overlap make it hook).
+    if (!io::orientationProblem(ll, left, right).empty() || centreLeavesOutline(pts, bounds.left, bounds.right)) {
       result_.not_built.push_back({a.road->id, i, d.road->id, o});
       return false;
     }

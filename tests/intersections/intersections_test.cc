@@ -155,6 +155,16 @@ TEST(IntersectionCurve, ABoundTighterThanTwoMetresIsTheChordBetweenItsEnds) {
   EXPECT_EQ(arc.right, b.right);
 }
 
+TEST(IntersectionCurve, ACentreLineThatHooksOutOfItsLaneletIsSeen) {
+  // A lanelet 10 m long and 3.4 m wide; its centre line inside, then one that bulges past the
+  // left bound, then one that overshoots the end and comes back to it (kingsway's hooked right
+  // turn between lane ends that nearly overlap).
+  const std::vector<Vector2d> left{{0, 1.7}, {5, 1.7}, {10, 1.7}}, right{{0, -1.7}, {5, -1.7}, {10, -1.7}};
+  EXPECT_FALSE(lanemap::intersections::centreLeavesOutline({{0, 0}, {5, 0.5}, {10, 0}}, left, right));
+  EXPECT_TRUE(lanemap::intersections::centreLeavesOutline({{0, 0}, {3, 0}, {5, 2.5}, {7, 0}, {10, 0}}, left, right));
+  EXPECT_TRUE(lanemap::intersections::centreLeavesOutline({{0, 0}, {9, 0}, {11, 0.5}, {10, 0}}, left, right));
+}
+
 TEST(IntersectionCurve, BoundsOfASharpTurnStayOnTheirSides) {
   // A right turn on a tiny junction: the centre turns 90 degrees within ~2 m, a radius below the
   // 1.75 m half lane width, where an offset of the centre curve folds the inner bound back.

@@ -23,6 +23,14 @@ double interp(const std::vector<double>& xs, const std::vector<double>& ys, doub
 // A lane boundary's offset at s (its probes, linearly interpolated; the end values beyond them).
 double boundaryD(const Lane& l, const Boundary& b, double s) { return interp(l.waypoint_s, b.d, s); }
 
+// The stations of a lanelet piece [a, b] of lane l: its ends and the lane's way-points between them.
+std::vector<double> pieceStations(const Lane& l, double a, double b) {
+  std::vector<double> ss{a};
+  for (double s : l.waypoint_s) if (s > a + 0.2 && s < b - 0.2) ss.push_back(s);
+  ss.push_back(b);
+  return ss;
+}
+
 // The type of a border two lanes share, from what each lane's probes found there: paint wins over
 // no paint, solid over dashed (crossing it is not allowed when either side saw a solid line).
 map::LineType sharedType(map::LineType a, map::LineType b) {
@@ -141,9 +149,9 @@ map::LaneMap toLaneMap(const ExplorationResult& r, double lat, double lon, doubl
   }
   // A lane's bound offset at s: halfway between its probes and its neighbour's where the two share
   // the border, its own probes elsewhere. Every piece and every shared line takes its points from
-  // here, so a bound runs on without a break where it becomes or stops being shared.
-  // Within kBlendM of the shared stretch the lane's own probes blend into it linearly, so the
-  // bound does not step sideways where its sharing begins or ends.
+  // here, so a bound runs on without a break where it becomes or stops being shared; within
+  // kBlendM of the shared stretch the lane's own probes blend into it linearly, so the bound does
+  // not step sideways where its sharing begins or ends.
   constexpr double kBlendM = 4.0;
   const auto boundAt = [&](int lane, bool right_side, double s) -> double {
     const Lane& l = r.lanes[lane];
@@ -186,16 +194,13 @@ map::LaneMap toLaneMap(const ExplorationResult& r, double lat, double lon, doubl
       map::LineString line;
       line.id = next++;
       line.type = sharedType(ll.right.type, rl.left.type);
-      std::vector<double> ss{from};
-      for (double s : ll.waypoint_s) if (s > from + 0.2 && s < to - 0.2) ss.push_back(s);
-      ss.push_back(to);
-      for (double s : ss) {
+      for (double s : pieceStations(ll, from, to)) {
         const Eigen::Vector2d p = r.frame->toEnu(s, boundAt(nb.left, true, s));
         line.points.emplace_back(p.x(), p.y(), 0.0);
       }
       shared_line[key] = line.id;
       out.lines.push_back(std::move(line));
-      return shared_line[key];
+      return out.lines.back().id;
     }
     return -1;
   };
@@ -207,9 +212,7 @@ map::LaneMap toLaneMap(const ExplorationResult& r, double lat, double lon, doubl
     const auto& c = cuts[i];
     for (size_t k = 0; k + 1 < c.size(); ++k) {
       const double a = c[k], b = c[k + 1];
-      std::vector<double> ss{a};
-      for (double s : l.waypoint_s) if (s > a + 0.2 && s < b - 0.2) ss.push_back(s);
-      ss.push_back(b);
+      const std::vector<double> ss = pieceStations(l, a, b);
       const int64_t shared_left = sharedBorder(static_cast<int>(i), false, a, b);
       const int64_t shared_right = sharedBorder(static_cast<int>(i), true, a, b);
       map::LineString left, right;

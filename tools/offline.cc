@@ -48,6 +48,7 @@
 #include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
 #include "core/lanes/options.h"
+#include "core/mapping/carried_lanes.h"
 #include "core/mapping/map_assembler.h"
 #include "core/mapping/partial_road.h"
 #include "core/mapping/road_lanes.h"
@@ -331,7 +332,11 @@ class OfflineMapper {
     if (partial) entry["partial"] = {{"station_m", partial->station_m}, {"road_length_m", partial->road_length_m}};
     try {
       const auto geometry = partial ? mapping::drivenStretch(*r, partial->station_m, explorer_) : lanes::RoadGeometry::fromSkeleton(*r);
-      auto [res, lanes_of_road, dropped] = mapping::exploreRoadLanes(grid, geometry, partial, explorer_, sk_.frame().origin());
+      int64_t before = -1;
+      const auto carried = mapping::lanesLeadingInto(sk_, *r, assembler_.roads(), explorer_, &before);
+      auto [res, lanes_of_road, dropped, carried_in] =
+          mapping::exploreRoadLanes(grid, geometry, partial, explorer_, sk_.frame().origin(), carried);
+      if (carried_in) entry["lanes_carried_from"] = before;
       for (const auto& why : dropped) std::fprintf(stderr, "\rlanemap-offline: road %lld: lanelet left out, %s\n", static_cast<long long>(road_id), why.c_str());
       if (!dropped.empty()) entry["lanes_dropped"] = dropped;
       crosswalks_[road_id] = lanes::findCrosswalks(grid, lanes_of_road, 1);

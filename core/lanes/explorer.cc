@@ -828,6 +828,32 @@ std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const Ro
   return kept;
 }
 
+// A lane whose centre line crosses observed drivable ground at under min_drivable_share of its
+// length (sampled every metre) lies on nothing the camera saw as road: particles started across
+// a road seen only from the junctions (no drivable cell at all) live on in unobserved ground beyond
+// the kerbs. Dropped, the others renumbered.
+void dropLanesOnNothing(const Raster& R, const ExplorerOptions& o, std::vector<Lane>* lanes) {
+  if (o.min_drivable_share <= 0.0) return;
+  std::vector<int> new_id(lanes->size(), -1);
+  std::vector<Lane> kept;
+  for (auto& lane : *lanes) {
+    int n = 0, good = 0;
+    for (double s = lane.s_begin; s <= lane.s_end; s += 1.0, ++n) {
+      const int i = R.row(s), j = R.col(lane.centre.d(s));
+      good += i >= 0 && i < R.ns && j >= 0 && j < R.nd && R.at(i, j) == kDrivable;
+    }
+    if (n > 0 && good < o.min_drivable_share * n) continue;
+    new_id[lane.id] = static_cast<int>(kept.size());
+    kept.push_back(std::move(lane));
+  }
+  for (auto& lane : kept) {
+    lane.id = new_id[lane.id];
+    if (lane.split_from >= 0) lane.split_from = new_id[lane.split_from];
+    if (lane.merges_into >= 0) lane.merges_into = new_id[lane.merges_into];
+  }
+  *lanes = std::move(kept);
+}
+
 // Probe one side (dir +1 left, -1 right) from (s, d) along the normal until a marking, curb,
 // blocked or outside cell: the boundary's offset (a marking's middle, shared with the neighbour
 // lane; a curb's or blocked cell's near edge), and in *hit the class found (kUnobserved: nothing
@@ -887,6 +913,40 @@ void rejectBoundaryOutliers(const FrenetFrame& frame, const Lane& lane, const Ex
   }
 }
 
+// A lane's centre line lies midway between its bounds (Lanelet2 derives it so). The particles'
+// mean lies midway between the lines' near edges instead: beside a double centre line (0.4 m of
+// paint) and a kerb (the drivable area ends at its foot) it runs a fifth of a metre off. Where both
+// probes found a boundary at at least half the way-points, the centre line moves by the median of
+// (left + right) / 2 - centre over them, when that is at most recentre_max_m (more: the bounds
+// are not this lane's). A lane splitting off or merging into another, or one another lane splits
+// off or merges into, keeps its line (the two must meet there).
+void recentreOnBounds(const FrenetFrame& frame, const ExplorerOptions& o, const std::vector<uint8_t>& both_hit,
+                      bool has_branches, Lane* lane) {
+  if (o.recentre_max_m <= 0.0 || has_branches || lane->split_from >= 0 || lane->merges_into >= 0) return;
+  std::vector<double> e;
+  for (size_t k = 0; k < lane->waypoint_s.size(); ++k) {
+    if (both_hit[k]) e.push_back(0.5 * (lane->left.d[k] + lane->right.d[k]) - lane->centre.d(lane->waypoint_s[k]));
+  }
+  if (e.empty() || 2 * e.size() < lane->waypoint_s.size()) return;
+  std::nth_element(e.begin(), e.begin() + e.size() / 2, e.end());
+  const double shift = e[e.size() / 2];
+  if (!(std::abs(shift) <= o.recentre_max_m)) return;
+  // The moved line stays well inside its bounds everywhere (a quarter of the lane's width from
+  // each, at most half a metre), or the lane keeps its line: where a bound closes in (a taper at
+  // the lane's end) a line moved across it would make the lanelet, and its connections, invalid.
+  for (size_t k = 0; k < lane->waypoint_s.size(); ++k) {
+    const double c = lane->centre.d(lane->waypoint_s[k]) + shift;
+    const double margin = std::min(0.5, 0.25 * (lane->left.d[k] - lane->right.d[k]));
+    if (!(lane->left.d[k] - c >= margin && c - lane->right.d[k] >= margin)) return;
+  }
+  PiecewiseLinearFit fit = lane->centre.piecewiseLinear();
+  for (double& v : fit.values) v += shift;
+  lane->centre = CentreLine(fit, lane->s_begin, lane->s_end);
+  for (size_t k = 0; k < lane->waypoint_s.size(); ++k) {
+    lane->waypoints[k] = frame.toEnu(lane->waypoint_s[k], lane->centre.d(lane->waypoint_s[k]));
+  }
+}
+
 // Way-points and lane boundaries (METHOD.md section 4, step 5): way-points every
 // waypoint_spacing_m along each lane's centre line, each boundary probed there on both sides
 // (asymmetric, follows the drivable area) and typed by the classes its probes hit most.
@@ -895,6 +955,7 @@ void probeBoundaries(const Raster& R, const FrenetFrame& frame, const ExplorerOp
     const double len = lane.s_end - lane.s_begin;
     const int n = std::max(2, static_cast<int>(std::ceil(len / o.waypoint_spacing_m)) + 1);
     int count[2][8] = {};
+    std::vector<uint8_t> both_hit(n, 1);  // both probes found a boundary at way-point k
     for (int k = 0; k < n; ++k) {
       const double s = lane.s_begin + len * k / (n - 1);
       const double d = lane.centre.d(s);
@@ -907,9 +968,14 @@ void probeBoundaries(const Raster& R, const FrenetFrame& frame, const ExplorerOp
         b.d.push_back(db);
         b.points.push_back(frame.toEnu(s, db));
         ++count[side][hit];
+        if (hit == kUnobserved) both_hit[k] = 0;
       }
     }
     for (Boundary* b : {&lane.left, &lane.right}) rejectBoundaryOutliers(frame, lane, o, b);
+    const bool has_branches = std::any_of(lanes->begin(), lanes->end(), [&](const Lane& other) {
+      return other.split_from == lane.id || other.merges_into == lane.id;
+    });
+    recentreOnBounds(frame, o, both_hit, has_branches, &lane);
     for (int side = 0; side < 2; ++side) {
       const int* c = count[side];
       const int paint = c[kSolid] + c[kDashed];
@@ -971,6 +1037,7 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
   // 4-5. Centre lines, way-points, boundaries.
   t0 = Clock::now();
   res.lanes = fitLanes(filter.tracks(), filter.bins(), road, s_stop, min_lane_length, o);
+  dropLanesOnNothing(R, o, &res.lanes);
   probeBoundaries(R, *frame, o, &res.lanes);
   indexLanesFromLeft(&res.lanes);
   res.stats.fit_s = since(t0);

@@ -32,9 +32,16 @@
 //    dropped, and so is any lane holding under weak_density_fraction of the particles per metre
 //    of a lane over half its stretch (a few particles that found room beyond a kerb).
 // 4. Each lane's particle history is regressed (Eq. 6: piecewise linear with optimised break
-//    points, then a natural cubic spline) as d(s); way-points every waypoint_spacing_m.
+//    points, then a natural cubic spline) as d(s); way-points every waypoint_spacing_m. A lane
+//    whose centre line crosses observed drivable ground at under min_drivable_share of its length
+//    lies on nothing the camera saw as road (particles living on in unobserved ground) and is
+//    dropped (dropLanesOnNothing).
 // 5. Boundaries: from each way-point, probe left and right along the normal until a marking, curb,
 //    blocked or outside cell; the marking type is kept (asymmetric, follows the drivable area).
+//    The centre line then moves to midway between its bounds, by the median offset over the
+//    way-points where both were found, at most recentre_max_m (recentreOnBounds): the particles'
+//    mean lies midway between the lines' near edges, off by up to a fifth of a metre beside a
+//    double line or a kerb.
 #pragma once
 
 #include "core/bev/bev_grid.h"

@@ -60,8 +60,11 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("same_lane_m", o.same_lane_m);
   r.read("min_lane_length_m", o.min_lane_length_m);
   r.read("short_road_min_m", o.short_road_min_m);
+  r.read("carry_lanes_max_m", o.carry_lanes_max_m);
+  r.read("carry_max_turn_rad", o.carry_max_turn_rad);
   r.read("split_neighbour_m", o.split_neighbour_m);
   r.read("bulge_density_fraction", o.bulge_density_fraction);
+  r.read("min_drivable_share", o.min_drivable_share);
   r.read("weak_density_fraction", o.weak_density_fraction);
   r.read("bin_m", o.bin_m);
   r.read("break_spacing_m", o.break_spacing_m);
@@ -71,6 +74,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("default_half_width_m", o.default_half_width_m);
   r.read("boundary_outlier_m", o.boundary_outlier_m);
   r.read("boundary_median_window", o.boundary_median_window);
+  r.read("recentre_max_m", o.recentre_max_m);
   try {
     o.validate();
   } catch (const LanesError& e) {
@@ -91,6 +95,9 @@ void ExplorerOptions::validate() const {
   need(max_heading_rad > 0 && max_heading_rad < 1.6, "max_heading_rad in (0, 1.6)");
   need(marking_fraction > 0 && marking_fraction <= 1, "marking_fraction in (0, 1]");
   need(separation_fraction > 0 && separation_fraction <= 1, "separation_fraction in (0, 1]");
+  need(carry_lanes_max_m >= 0 && carry_max_turn_rad >= 0 && carry_max_turn_rad < 1.6,
+       "carry_lanes_max_m >= 0 and carry_max_turn_rad in [0, 1.6)");
+  need(min_drivable_share >= 0 && min_drivable_share <= 1, "min_drivable_share in [0, 1]");
   need(kill_min_count >= 1, "kill_min_count >= 1");
   need(drivable_fraction >= 0 && drivable_fraction <= 1, "drivable_fraction in [0, 1]");
   need(drivable_min_count >= 0, "drivable_min_count >= 0");
@@ -110,6 +117,7 @@ void ExplorerOptions::validate() const {
   need(bin_m > 0 && break_spacing_m >= bin_m && break_penalty_m2 >= 0, "regression");
   need(waypoint_spacing_m > 0, "waypoint_spacing_m > 0");
   need(probe_max_m > 0 && default_half_width_m > 0, "probing");
+  need(recentre_max_m >= 0 && recentre_max_m <= 2, "recentre_max_m in [0, 2]");
   need(boundary_outlier_m >= 0 && boundary_median_window >= 1 && boundary_median_window % 2 == 1,
        "boundary_outlier_m >= 0 and an odd boundary_median_window >= 1");
   if (!std::isfinite(v_max) || !std::isfinite(w_max)) throw LanesError("lane explorer options must be finite");

@@ -80,10 +80,17 @@ struct ExplorerOptions {
   double short_road_min_m = 6.0;         // a road whose stretch between its two ROIs is shorter (a
                                          //   link between close junctions) is explored over this
                                          //   much around the stretch's middle, into the ROIs
+  double carry_lanes_max_m = 15.0;       // a road whose stretch between its ROIs is shorter takes the
+                                         //   lanes of the road leading straight into it (carried_lanes.h)
+                                         //   when exploring found no lane on it (0: never)
+  double carry_max_turn_rad = 0.35;      // ... "straight": its heading turns by at most this at the junction
   double split_neighbour_m = 4.5;        // a lane born/ending this close to another splits/merges
   double bulge_density_fraction = 0.15;  // a lane that splits off or merges into a lane with fewer
                                          //   particles per metre than this fraction of that lane's
                                          //   is noise beside it, not a lane
+  double min_drivable_share = 0.1;       // a lane whose centre line crosses observed drivable ground
+                                         //   at under this share of its length lies on nothing: dropped
+                                         //   (0: never)
   double weak_density_fraction = 0.05;   // any lane with fewer particles per metre than this
                                          //   fraction of a lane over most of its stretch is
                                          //   dropped (0: never)
@@ -102,6 +109,9 @@ struct ExplorerOptions {
   // dashed line, a speck of noise): it takes that median, so a bound does not zigzag. 0: off.
   double boundary_outlier_m = 0.5;
   int boundary_median_window = 5;        // odd
+  // A lane's centre line moves to midway between its probed bounds (by their median offset over
+  // the way-points where both were found, if at most this; 0: off).
+  double recentre_max_m = 0.4;
 
   static ExplorerOptions fromYaml(const YAML::Node& node);  // throws LanesError
   // From the `explorer:` section of a config (strict: the caller's finish() refuses other keys);

@@ -52,9 +52,20 @@ std::vector<std::string> dropMisreadLanelets(map::LaneMap& lanes) {
 
 RoadLanes exploreRoadLanes(const bev::BevGrid& grid, const lanes::RoadGeometry& geometry,
                            const std::optional<map::PartialRoad>& partial, const lanes::ExplorerOptions& options,
-                           const geo::LatLonAlt& origin) {
+                           const geo::LatLonAlt& origin, const std::vector<lanes::CarriedLane>& carried) {
   RoadLanes out;
-  out.result = lanes::exploreRoad(grid, geometry, options);
+  const bool may_carry = !partial && !carried.empty() && geometry.s_end - geometry.s_begin < options.carry_lanes_max_m;
+  bool explored = true;
+  try {
+    out.result = lanes::exploreRoad(grid, geometry, options);
+  } catch (const lanes::LanesError&) {
+    if (!may_carry) throw;
+    explored = false;  // nothing to explore: the lanes run on from the road before
+  }
+  if (may_carry && (!explored || lanes::takesCarriedLanes(geometry, out.result, carried.size(), options))) {
+    out.result = lanes::carryLanesThrough(geometry, carried, options);
+    out.lanes_carried = true;
+  }
   out.lanes = lanes::toLaneMap(out.result, origin.lat, origin.lon, origin.alt);
   setConfidence(out.lanes, out.result, laneConfidences(grid, out.result, options));  // per lane, 0..1
   if (partial) {

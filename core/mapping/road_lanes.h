@@ -7,6 +7,7 @@
 
 #include "core/bev/bev_grid.h"
 #include "core/geo/local_frame.h"
+#include "core/lanes/carried_lanes.h"
 #include "core/lanes/explorer.h"
 #include "core/map/lane_map.h"
 
@@ -24,6 +25,8 @@ struct RoadLanes {
   // naming the lanelet. The rest of the road is mapped: one bad lane costs that lane, not the map
   // (writeLanelet2 refuses a map holding one).
   std::vector<std::string> lanes_dropped;
+  // The lanes are those of the road before, carried through this short one (carried_lanes.h).
+  bool lanes_carried = false;
 };
 
 // Removes from `lanes` every lanelet io::orientationProblem finds, with what referred to it: its
@@ -31,9 +34,11 @@ struct RoadLanes {
 // crosswalks' references. Returns the problems, one per lanelet removed, in map order.
 std::vector<std::string> dropMisreadLanelets(map::LaneMap& lanes);
 
-// Throws what lanes::exploreRoad throws.
+// `carried`: the lanes of the road leading straight into this one (mapping::lanesLeadingInto);
+// a short road takes them instead of what exploring it found when lanes::takesCarriedLanes says so
+// (never a partial road). Throws what lanes::exploreRoad throws (when nothing is carried).
 RoadLanes exploreRoadLanes(const bev::BevGrid& grid, const lanes::RoadGeometry& geometry,
                            const std::optional<map::PartialRoad>& partial, const lanes::ExplorerOptions& options,
-                           const geo::LatLonAlt& origin);
+                           const geo::LatLonAlt& origin, const std::vector<lanes::CarriedLane>& carried = {});
 
 }  // namespace lanemap::mapping

@@ -35,6 +35,7 @@
 #include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
 #include "core/lanes/stop_lines.h"
+#include "core/mapping/carried_lanes.h"
 #include "core/mapping/map_assembler.h"
 #include "core/mapping/partial_road.h"
 #include "core/mapping/road_lanes.h"
@@ -174,7 +175,14 @@ class LaneMapperApp {
     }
     const std::optional<map::PartialRoad> driven_to =
         partial ? std::optional<map::PartialRoad>(map::PartialRoad{partial->station_m, partial->road_length_m}) : std::nullopt;
-    auto [res, m, dropped] = mapping::exploreRoadLanes(grid, geometry, driven_to, options_, sk_->frame().origin());
+    std::vector<lanes::CarriedLane> carried;  // a short road's lanes may run on from the road before
+    {
+      std::lock_guard<std::mutex> lock(roads_mutex_);
+      carried = mapping::lanesLeadingInto(*sk_, *road, assembler_->roads(), options_);
+    }
+    auto [res, m, dropped, carried_in] =
+        mapping::exploreRoadLanes(grid, geometry, driven_to, options_, sk_->frame().origin(), carried);
+    if (carried_in) process_.counters().add("roads_lanes_carried");
     for (const auto& why : dropped) std::cerr << "lane_mapper: road " << job.road_id << ": lanelet left out, " << why << "\n";
     process_.counters().add("lanelets_dropped", static_cast<int64_t>(dropped.size()));
     if (partial) process_.counters().add("roads_partial");

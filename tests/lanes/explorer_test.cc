@@ -496,6 +496,53 @@ TEST(Explorer, NoLanesOfSpeckledGround) {
   }
 }
 
+// A lane's centre line lies midway between its bounds. Here a one-way lane 3.5 m wide between a
+// 1 m band of paint on its left (a hatched island's edge: solid lines side by side from d = 0 to
+// 0.9, the bound at its middle, 0.45) and a thin dashed line on its right (d = -3.05): the true
+// centre is at -1.3, the free ground's middle at -1.53. The particles' mean is the latter; the
+// centre line is moved to midway between the probed bounds (recentre_max_m), within 5 cm of the
+// truth; without (recentre_max_m 0) it is 0.15 m or more off.
+TEST(Explorer, CentreLineMidwayBetweenItsBounds) {
+  Scenario sc;
+  sc.layout.ref.length = 150.0;
+  auto& lines = sc.layout.lines;
+  for (double d = 0.0; d <= 0.91; d += 0.15) lines.push_back({constant(d), -1e9, 1e9, Line::kSolid, false});
+  lines.push_back({constant(-3.05), -1e9, 1e9, Line::kDashed, true});
+  lines.push_back({constant(-6.55), -1e9, 1e9, Line::kSolid, false});
+  lines.push_back({constant(-7.05), -1e9, 1e9, Line::kCurb, false});
+  lines.push_back({constant(1.5), -1e9, 1e9, Line::kCurb, false});
+  sc.layout.areas.push_back({constant(-7.05), constant(1.5)});
+  sc.truth.push_back({constant(-1.3)});
+  sc.truth.push_back({constant(-4.8)});
+  const Report rep = run(sc);
+  expectLanes(rep, sc, 0.05);
+  ExplorerOptions off;
+  off.recentre_max_m = 0.0;
+  const Report before = run(sc, 1, off);
+  ASSERT_EQ(before.result.lanes.size(), 2u);
+  double worst = 0.0;
+  for (double r : before.rms) worst = std::max(worst, r);
+  EXPECT_GT(worst, 0.15) << "the particles' mean: the free ground's middle";
+}
+
+// A road seen only from the junctions: its corridor observed within 8 m of its line, all of it
+// background (no ego lane in a junction's frames), nothing seen beyond. The start strip falls on
+// the unobserved ground beyond and particles live on there: a lane whose centre line crosses
+// observed drivable ground at under min_drivable_share of its length lies on nothing and is not
+// one; without the rule (0) lanes are found 8 m and more off the road's line.
+TEST(Explorer, NoLaneOnGroundNobodySawAsRoad) {
+  Scenario sc;
+  sc.layout.ref.length = 40.0;
+  sc.layout.observed_half_width = 8.0;  // background: no area, no line
+  const Report rep = run(sc);
+  EXPECT_TRUE(rep.result.lanes.empty());
+  ExplorerOptions off;
+  off.min_drivable_share = 0.0;
+  const Report without = run(sc, 1, off);
+  ASSERT_FALSE(without.result.lanes.empty());
+  for (const Lane& l : without.result.lanes) EXPECT_GT(std::abs(l.centre.d(20.0)), 8.0) << "lane " << l.id;
+}
+
 // Issue 16, the benchmark's Arizona highway: the car drives in the right lane of three and the
 // left lane's ground is seen far off, 2-4 times per cell; in 6 % of its cells one of those
 // observations is the smeared dashed line (one hit in three: a third, over marking_fraction), in

@@ -1,0 +1,43 @@
+// Lanes carried through a short road (issue 16). A link between two close junctions is seen almost
+// only from inside them: frames taken in a junction name no ego lane, so its BEV holds kerbs and
+// junction ground, and often not one cell labelled drivable. Exploring it cannot find its lanes;
+// the road the car came from, a moment earlier, showed them. Its lanes, where they end at the
+// junction, keep their offsets from the OSM road line (the way runs on through the node) and run
+// on through the short road.
+// - When: the road's stretch between its ROIs is shorter than carry_lanes_max_m and exploring
+//   found no lane on it. Where it found any, the road keeps them: its own evidence says where its
+//   lanes are, and a road's lanes are where they are relative to its own OSM line (the line is the
+//   carriageway's middle: where the lane count changes at the junction, every offset moves by
+//   half a lane, so carried offsets cannot be checked against explored ones lane by lane).
+// - What: one lane per carried lane over the road's explored stretch (explorationStretch), its
+//   centre at the carried offset d, its bounds at the carried half-widths with the carried line
+//   types. No particle supports them (particle_samples 0), which their confidence says.
+// Which road leads into the short one, and its lanes there, is core/mapping/carried_lanes.h.
+#pragma once
+
+#include "core/lanes/explorer.h"
+#include "core/map/lane_map.h"
+
+#include <vector>
+
+namespace lanemap::lanes {
+
+// A lane of the road before, where it ends at the junction into the short road.
+struct CarriedLane {
+  double d = 0.0;                  // centre's offset from its road's line (its Frenet frame), m
+  double half_left_m = 1.75;       // its left bound's offset from the centre
+  double half_right_m = 1.75;      // its right bound's offset from the centre
+  map::LineType left_type = map::LineType::kVirtual;
+  map::LineType right_type = map::LineType::kVirtual;
+};
+
+// Whether `explored` (exploreRoad on `road`) gives way to `carried` lanes, as described above.
+bool takesCarriedLanes(const RoadGeometry& road, const ExplorationResult& explored, size_t carried,
+                       const ExplorerOptions& options);
+
+// The road's lanes made of the carried ones (left to right, one of two closer than same_lane_m
+// dropped). Throws LanesError for a road without a polyline or with nothing carried.
+ExplorationResult carryLanesThrough(const RoadGeometry& road, std::vector<CarriedLane> carried,
+                                    const ExplorerOptions& options);
+
+}  // namespace lanemap::lanes

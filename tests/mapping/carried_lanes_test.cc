@@ -1,0 +1,243 @@
+// Lanes carried through a short road (issue 16; core/lanes/carried_lanes.h, core/mapping/
+// carried_lanes.h). A 12 m link between two junctions seen only from inside them has no drivable
+// cell: exploring it finds nothing, and it takes the lanes of the road leading straight into it.
+// On the simulator's West Oakland world (its truth's road lanelets standing for mapped roads),
+// the lanes carried into every road whose road before runs straight on with as many lanes lie on
+// that road's own truth lanes; a turn carries nothing; a road where exploring found lanes keeps
+// them.
+#include "core/lanes/carried_lanes.h"
+#include "core/mapping/carried_lanes.h"
+#include "core/mapping/road_lanes.h"
+
+#include "core/intersections/intersections.h"
+#include "core/lanes/frenet.h"
+#include "core/osm/osm_data.h"
+#include "core/sim/world_builder.h"
+#include "core/skeleton/skeleton.h"
+#include "tests/common/sim_drive.h"
+#include "tests/lanes/synthetic_bev.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+namespace lanemap {
+namespace {
+
+struct World {
+  osm::OsmData data;
+  std::unique_ptr<skeleton::Skeleton> sk;
+  std::map<int64_t, map::LaneMap> roads;  // the truth's road lanelets by road id
+};
+
+const World& westOakland() {
+  static const World w = [] {
+    World w;
+    w.data = osm::readOsm(lanemap::testing::dataPath("osm/west-oakland.osm"));
+    w.sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(w.data));
+    sim::WorldOptions wo;
+    wo.seed = 3;
+    w.roads = intersections::roadsOf(sim::buildWorld(*w.sk, wo)->truth());
+    return w;
+  }();
+  return w;
+}
+
+// Lateral offsets (road frame) of a road's truth lanes where `s` is.
+std::vector<double> truthOffsets(const map::LaneMap& m, const lanes::FrenetFrame& frame, double s) {
+  std::vector<double> out;
+  for (const auto& ll : m.lanelets) {
+    if (ll.kind != map::LaneletKind::kRoad || ll.centre.size() < 2) continue;
+    double best = INFINITY, d = 0.0;
+    for (const auto& p : ll.centre) {
+      const Eigen::Vector2d sd = frame.toFrenet(p.head<2>());
+      if (std::abs(sd.x() - s) < best) {
+        best = std::abs(sd.x() - s);
+        d = sd.y();
+      }
+    }
+    if (best < 2.0) out.push_back(d);
+  }
+  return out;
+}
+
+size_t laneCount(const map::LaneMap& m) {
+  std::set<int> idx;
+  for (const auto& ll : m.lanelets) {
+    if (ll.kind == map::LaneletKind::kRoad) idx.insert(ll.index_from_left);
+  }
+  return idx.size();
+}
+
+TEST(CarriedLanes, TheLanesOfTheRoadBeforeLieOnTheTruthOfEveryRoadThatRunsStraightOn) {
+  const World& w = westOakland();
+  lanes::ExplorerOptions o;
+  o.carry_lanes_max_m = 1e9;  // every road as if short: West Oakland's are long, their truth is known
+  int compared = 0, turns = 0, shorts = 0;
+  for (const auto& road : w.sk->roads()) {
+    auto own = w.roads.find(road.id);
+    if (own == w.roads.end() || own->second.lanelets.empty()) continue;
+    std::map<int64_t, map::LaneMap> others = w.roads;
+    others.erase(road.id);  // the road itself is not mapped yet
+    int64_t before = -1;
+    const auto carried = mapping::lanesLeadingInto(*w.sk, road, others, o, &before);
+    if (carried.empty()) {
+      // Roads ending at its start that are mapped but all turn into it: nothing carried.
+      const auto* start = w.sk->intersection(road.from);
+      for (int64_t id : start->incoming) turns += id != road.reverse_id && w.roads.count(id) > 0;
+      continue;
+    }
+    ASSERT_GE(before, 0);
+    EXPECT_NE(before, road.reverse_id);
+    const bool short_road = road.s_end - road.s_begin < lanes::ExplorerOptions{}.carry_lanes_max_m;
+    EXPECT_EQ(mapping::lanesLeadingInto(*w.sk, road, others, lanes::ExplorerOptions{}).size(), short_road ? carried.size() : 0)
+        << "road " << road.id << ": with the shipped options only a short road is looked at";
+    shorts += short_road;
+    if (laneCount(w.roads.at(before)) != laneCount(own->second)) continue;  // offsets move with the count
+    const lanes::RoadGeometry geometry = lanes::RoadGeometry::fromSkeleton(road);
+    const lanes::ExplorationResult r = lanes::carryLanesThrough(geometry, carried, o);
+    ASSERT_EQ(r.lanes.size(), carried.size()) << "road " << road.id;
+    for (size_t k = 0; k < r.lanes.size(); ++k) {
+      const lanes::Lane& lane = r.lanes[k];
+      EXPECT_EQ(lane.index_from_left, static_cast<int>(k));
+      if (k > 0) {
+        EXPECT_LT(lane.centre.d(lane.s_begin), r.lanes[k - 1].centre.d(lane.s_begin)) << "left to right";
+      }
+      // The lane's start (by the junction it came through) on a truth lane of this road.
+      const auto truth = truthOffsets(own->second, *r.frame, lane.s_begin);
+      ASSERT_FALSE(truth.empty()) << "road " << road.id;
+      double nearest = INFINITY;
+      for (double d : truth) nearest = std::min(nearest, std::abs(d - lane.centre.d(lane.s_begin)));
+      EXPECT_LT(nearest, 0.25) << "road " << road.id << " lane " << k << " carried from road " << before;
+      // Its bounds a lane's width apart.
+      EXPECT_GT(lane.left.d.front() - lane.right.d.front(), 2.5) << "road " << road.id;
+      EXPECT_LT(lane.left.d.front() - lane.right.d.front(), 4.5) << "road " << road.id;
+      EXPECT_EQ(lane.particle_samples, 0) << "no particle supports a carried lane";
+    }
+    ++compared;
+  }
+  std::printf("roads compared: %d (%d short); mapped roads turning into a road: %d\n", compared, shorts, turns);
+  EXPECT_GE(compared, 20);
+  EXPECT_GT(turns, 0);
+}
+
+lanes::RoadGeometry link(double length, double roi) {
+  lanes::RoadGeometry g;
+  g.road_id = 11;
+  g.from_node = 1;
+  g.to_node = 2;
+  g.polyline = {{0.0, 0.0}, {length, 0.0}};
+  g.s_begin = roi;
+  g.s_end = length - roi;
+  return g;
+}
+
+std::vector<lanes::CarriedLane> twoLanes() {
+  lanes::CarriedLane a, b;
+  a.d = 1.75;
+  a.left_type = map::LineType::kCurb;
+  a.right_type = map::LineType::kDashed;
+  b.d = -1.75;
+  b.half_left_m = 1.75;
+  b.half_right_m = 1.6;
+  b.left_type = map::LineType::kDashed;
+  b.right_type = map::LineType::kSolid;
+  return {b, a};  // any order
+}
+
+// A 12 m link (30 m junction to junction, the ROIs leave 12 m) seen only from the junctions: not
+// one cell of it labelled drivable. Exploring finds no lane; the road before's two lanes run on.
+TEST(CarriedLanes, ATwelveMetreLinkSeenOnlyFromTheJunctionsTakesThem) {
+  const lanes::ExplorerOptions o;
+  bev::BevGrid grid;  // junction ground: observed, background, across the whole corridor
+  for (int i = -10; i < 310; ++i) {
+    for (int j = -170; j < 170; ++j) grid.add(bev::BevGrid::Cell(i, j), bev::Layer::kObserved, 6);
+  }
+  const lanes::RoadGeometry g = link(30.0, 9.0);
+  const geo::LatLonAlt origin{49.0, 8.4, 0.0};
+  const mapping::RoadLanes alone = mapping::exploreRoadLanes(grid, g, std::nullopt, o, origin);
+  EXPECT_TRUE(alone.result.lanes.empty()) << "nothing drivable: nothing explored";
+  EXPECT_FALSE(alone.lanes_carried);
+
+  const mapping::RoadLanes carried = mapping::exploreRoadLanes(grid, g, std::nullopt, o, origin, twoLanes());
+  EXPECT_TRUE(carried.lanes_carried);
+  ASSERT_EQ(carried.result.lanes.size(), 2u);
+  const lanes::Lane& left = carried.result.lanes[0];
+  const lanes::Lane& right = carried.result.lanes[1];
+  EXPECT_DOUBLE_EQ(left.centre.d(15.0), 1.75);
+  EXPECT_DOUBLE_EQ(right.centre.d(15.0), -1.75);
+  EXPECT_NEAR(left.s_begin, 9.0, 1e-9);
+  EXPECT_NEAR(left.s_end, 21.0, 1e-9);
+  EXPECT_EQ(left.left.type, map::LineType::kCurb);
+  EXPECT_EQ(right.right.type, map::LineType::kSolid);
+  EXPECT_NEAR(right.right.d[3], -3.35, 1e-9);
+  // As lanelets: two, side by side, sharing their border (toLaneMap), each 12 m long.
+  ASSERT_EQ(carried.lanes.lanelets.size(), 2u);
+  EXPECT_EQ(carried.lanes.lanelets[0].right_id == carried.lanes.lanelets[1].left_id ||
+                carried.lanes.lanelets[1].right_id == carried.lanes.lanelets[0].left_id,
+            true);
+  for (const auto& ll : carried.lanes.lanelets) {
+    EXPECT_NEAR((ll.centre.back() - ll.centre.front()).head<2>().norm(), 12.0, 0.05);
+  }
+
+  // A long road is explored, never carried (its own evidence is the map): 40 m between the ROIs.
+  const lanes::RoadGeometry long_road = link(58.0, 9.0);
+  EXPECT_FALSE(mapping::exploreRoadLanes(grid, long_road, std::nullopt, o, origin, twoLanes()).lanes_carried);
+  // Nor is the road the drive ended on (partial: mapped as far as driven, nothing more).
+  EXPECT_FALSE(mapping::exploreRoadLanes(grid, g, map::PartialRoad{21.0, 30.0}, o, origin, twoLanes()).lanes_carried);
+  // Nor anything with carry_lanes_max_m 0.
+  lanes::ExplorerOptions off = o;
+  off.carry_lanes_max_m = 0.0;
+  EXPECT_FALSE(mapping::exploreRoadLanes(grid, g, std::nullopt, off, origin, twoLanes()).lanes_carried);
+}
+
+// Where exploring found lanes, they stay, even when the road before brings others (its lanes sit
+// elsewhere relative to the OSM line when the count changes at the junction).
+TEST(CarriedLanes, ARoadWhoseLanesWereFoundKeepsThem) {
+  using namespace lanes::testing;
+  Layout L;
+  L.ref.length = 30.0;
+  L.lines.push_back({constant(3.5), -1e9, 1e9, Line::kSolid, false});
+  L.lines.push_back({constant(0.0), -1e9, 1e9, Line::kDashed, true});
+  L.lines.push_back({constant(-3.5), -1e9, 1e9, Line::kSolid, false});
+  L.areas.push_back({constant(-3.5), constant(3.5)});
+  const bev::BevGrid grid = paint(L);
+  lanes::RoadGeometry g;
+  g.road_id = 5;
+  g.polyline = L.ref.polyline();
+  g.s_begin = 9.0;
+  g.s_end = 21.0;
+  const lanes::ExplorerOptions o;
+  std::vector<lanes::CarriedLane> three(3);
+  three[0].d = 3.5;
+  three[1].d = 0.0;
+  three[2].d = -3.5;
+  const mapping::RoadLanes r = mapping::exploreRoadLanes(grid, g, std::nullopt, o, {49.0, 8.4, 0.0}, three);
+  EXPECT_FALSE(r.lanes_carried);
+  ASSERT_EQ(r.result.lanes.size(), 2u);
+  for (const auto& lane : r.result.lanes) {
+    EXPECT_NEAR(lane.centre.d(15.0), lane.index_from_left == 0 ? 1.75 : -1.75, 0.2) << "explored, where the lanes are";
+  }
+}
+
+TEST(CarriedLanes, OneLaneCarriedTwiceIsOneLane) {
+  lanes::ExplorerOptions o;
+  std::vector<lanes::CarriedLane> c(3);
+  c[0].d = -1.7;
+  c[1].d = 1.8;
+  c[2].d = -1.2;  // within same_lane_m (1.2 m) of -1.7? 0.5 m: the same lane
+  const lanes::ExplorationResult r = lanes::carryLanesThrough(link(30.0, 9.0), c, o);
+  ASSERT_EQ(r.lanes.size(), 2u);
+  EXPECT_DOUBLE_EQ(r.lanes[0].centre.d(12.0), 1.8);
+  EXPECT_DOUBLE_EQ(r.lanes[1].centre.d(12.0), -1.2);  // the left one of the two stays
+  EXPECT_THROW(lanes::carryLanesThrough(link(30.0, 9.0), {}, o), lanes::LanesError);
+  // A 4 m link (under short_road_min_m) is carried over the 6 m around its middle, as explored.
+  const lanes::ExplorationResult shortest = lanes::carryLanesThrough(link(20.0, 8.0), c, o);
+  EXPECT_NEAR(shortest.lanes[0].s_end - shortest.lanes[0].s_begin, o.short_road_min_m, 1e-9);
+}
+
+}  // namespace
+}  // namespace lanemap

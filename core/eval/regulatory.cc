@@ -44,8 +44,6 @@ MatchScore matchNearest(size_t n_truth, size_t n_built, Distance distance, doubl
   return s;
 }
 
-double distanceToPolyline(const std::vector<Eigen::Vector3d>& pl, const Eigen::Vector2d& p);
-
 std::vector<const map::LineString*> stopLinesOf(const map::LaneMap& m) {
   std::vector<const map::LineString*> s;
   for (const auto& l : m.lines) {
@@ -86,17 +84,6 @@ std::vector<std::pair<const map::LineString*, bool>> sharedLines(const map::Lane
   return out;
 }
 
-double distanceToPolyline(const std::vector<Eigen::Vector3d>& pl, const Eigen::Vector2d& p) {
-  double best = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i + 1 < pl.size(); ++i) {
-    const Eigen::Vector2d a = pl[i].head<2>(), b = pl[i + 1].head<2>();
-    const double len2 = (b - a).squaredNorm();
-    const double t = len2 > 0.0 ? std::clamp((p - a).dot(b - a) / len2, 0.0, 1.0) : 0.0;
-    best = std::min(best, (a + t * (b - a) - p).norm());
-  }
-  return best;
-}
-
 // The point halfway along a polyline.
 Eigen::Vector2d midpointOf(const std::vector<Eigen::Vector3d>& pl) {
   const double total = geo::polylineLengthXy(pl);
@@ -129,7 +116,7 @@ RegulatoryScores scoreRegulatory(const map::LaneMap& truth, const map::LaneMap& 
       ts.size(), bs.size(),
       [&](size_t i, size_t j) {
         const Eigen::Vector2d mid = 0.5 * (bs[j]->points.front() + bs[j]->points.back()).head<2>();
-        return distanceToPolyline(ts[i]->points, mid);
+        return geo::distanceToPolylineXy(ts[i]->points, mid);
       },
       o.stop_line_match_m, &pairs);
   for (const auto& [i, j] : pairs) {
@@ -147,7 +134,7 @@ RegulatoryScores scoreRegulatory(const map::LaneMap& truth, const map::LaneMap& 
     double best = o.lane_change_match_m;
     std::optional<bool> found;
     for (const auto& [bline, byes] : b_shared) {
-      const double d = distanceToPolyline(bline->points, mid);
+      const double d = geo::distanceToPolylineXy(bline->points, mid);
       if (d < best) {
         best = d;
         found = byes;

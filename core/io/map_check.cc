@@ -2,6 +2,7 @@
 #include "core/io/map_check.h"
 
 #include "core/geo/local_frame.h"
+#include "core/geo/polyline.h"
 #include "core/io/atomic_file.h"
 #include "core/io/lanelet2.h"
 #include "core/osm/coordinate_guard.h"
@@ -82,18 +83,6 @@ std::string tag(const Tags& t, const std::string& k) {
 }
 
 using Polyline = std::vector<Eigen::Vector2d>;
-
-double distanceToPolyline(const Polyline& pl, const Eigen::Vector2d& p) {
-  double best = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i + 1 < pl.size(); ++i) {
-    const Eigen::Vector2d a = pl[i], b = pl[i + 1];
-    const double len2 = (b - a).squaredNorm();
-    const double t = len2 > 0 ? std::clamp((p - a).dot(b - a) / len2, 0.0, 1.0) : 0.0;
-    best = std::min(best, (a + t * (b - a) - p).norm());
-  }
-  if (pl.size() == 1) best = (pl[0] - p).norm();
-  return best;
-}
 
 bool insidePolygon(const Polyline& ring, const Eigen::Vector2d& p) {
   bool in = false;
@@ -263,7 +252,7 @@ std::vector<CheckResult> checkLanelet2Map(const std::string& path, const MapChec
           }
         }
         for (int64_t o : near) {
-          if (o != w && distanceToPolyline(shapes[o], p) < 0.1) ++close[o];
+          if (o != w && geo::distanceToPolyline(shapes[o], p) < 0.1) ++close[o];
         }
       }
       for (const auto& [o, n] : close) {
@@ -303,7 +292,7 @@ std::vector<CheckResult> checkLanelet2Map(const std::string& path, const MapChec
       Polyline closed = ring;
       closed.push_back(ring.front());
       for (const auto& p : polyline(*l.centre)) {
-        if (!insidePolygon(ring, p) && distanceToPolyline(closed, p) > 0.1) {
+        if (!insidePolygon(ring, p) && geo::distanceToPolyline(closed, p) > 0.1) {
           c.offenders.push_back(l.id);
           break;
         }

@@ -1,5 +1,6 @@
 #include "core/mapping/carried_lanes.h"
 
+#include "core/geo/polyline.h"
 #include "core/lanes/frenet.h"
 
 #include <algorithm>
@@ -14,19 +15,6 @@ namespace {
 
 double angleBetween(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return std::abs(std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b)));
-}
-
-// Distance from p to the polyline (its nearest point), the 3-D points' x and y.
-double distanceTo(const Eigen::Vector2d& p, const std::vector<Eigen::Vector3d>& line) {
-  double best = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i + 1 < line.size(); ++i) {
-    const Eigen::Vector2d a = line[i].head<2>(), b = line[i + 1].head<2>();
-    const Eigen::Vector2d ab = b - a;
-    const double t = ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-    best = std::min(best, (a + t * ab - p).norm());
-  }
-  if (line.size() == 1) best = (line[0].head<2>() - p).norm();
-  return best;
 }
 
 }  // namespace
@@ -107,8 +95,8 @@ std::vector<lanes::CarriedLane> lanesLeadingInto(const skeleton::Skeleton& skele
     lanes::CarriedLane c;
     c.d = dAt(p, st);
     const Eigen::Vector2d at = before_frame->toEnu(st, c.d);
-    c.half_left_m = distanceTo(at, left->points);
-    c.half_right_m = distanceTo(at, right->points);
+    c.half_left_m = geo::distanceToPolylineXy(left->points, at);
+    c.half_right_m = geo::distanceToPolylineXy(right->points, at);
     c.left_type = left->type;
     c.right_type = right->type;
     if (!(c.half_left_m > 0.5 && c.half_left_m < 4.0 && c.half_right_m > 0.5 && c.half_right_m < 4.0)) continue;

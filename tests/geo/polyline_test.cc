@@ -1,0 +1,27 @@
+// core/geo/polyline.h: a point's distance to a polyline (one helper for the map checks, the
+// regulatory-element scoring and the carried lanes, which each had their own).
+#include "core/geo/polyline.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace lanemap::geo {
+namespace {
+
+TEST(Polyline, DistanceToItsNearestSegment) {
+  const std::vector<Eigen::Vector2d> l = {{0, 0}, {10, 0}, {10, 10}};
+  EXPECT_DOUBLE_EQ(distanceToPolyline(l, {5, 3}), 3.0);      // beside the first segment
+  EXPECT_DOUBLE_EQ(distanceToPolyline(l, {12, 5}), 2.0);     // beside the second
+  EXPECT_DOUBLE_EQ(distanceToPolyline(l, {-3, -4}), 5.0);    // beyond the first end: to it
+  EXPECT_DOUBLE_EQ(distanceToPolyline(l, {10, 0}), 0.0);
+  EXPECT_DOUBLE_EQ(distanceToPolyline({{1, 1}}, {4, 5}), 5.0);  // one point
+  EXPECT_TRUE(std::isinf(distanceToPolyline({}, {0, 0})));
+  // A 3-D polyline is measured in the plane: its heights do not count.
+  const std::vector<Eigen::Vector3d> l3 = {{0, 0, 7}, {10, 0, -3}};
+  EXPECT_DOUBLE_EQ(distanceToPolylineXy(l3, {5, 3}), 3.0);
+  EXPECT_DOUBLE_EQ(distanceToPolylineXy({{1, 1, 9}}, {4, 5}), 5.0);
+}
+
+}  // namespace
+}  // namespace lanemap::geo

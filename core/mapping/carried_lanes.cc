@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <map>
 #include <memory>
 
@@ -74,18 +73,18 @@ std::vector<lanes::CarriedLane> lanesLeadingInto(const skeleton::Skeleton& skele
   // the junction, and the lanes beside it shift over: neither runs on), at the last station that
   // has that few.
   const double s0 = std::max(0.0, before->s_begin), s1 = std::min(before->s_end, before_frame->length());
-  size_t usual = 0;
+  size_t fewest = 0;
   double last = 0.0;
   for (double st = s0; st <= s1; st += 2.0) {
     size_t n = 0;
     for (const auto& p : pieces) n += st >= p.s.front() && st <= p.s.back();
     if (n == 0) continue;
-    if (usual == 0 || n <= usual) {
-      usual = n;
+    if (fewest == 0 || n <= fewest) {
+      fewest = n;
       last = st;
     }
   }
-  if (usual == 0) return out;
+  if (fewest == 0) return out;
   const double st = last;
   for (const auto& p : pieces) {
     if (st < p.s.front() || st > p.s.back()) continue;

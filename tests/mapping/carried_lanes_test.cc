@@ -22,7 +22,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
+#include <set>
+#include <vector>
 
 namespace lanemap {
 namespace {

@@ -14,16 +14,10 @@ bool takesCarriedLanes(const RoadGeometry& road, const ExplorationResult& explor
 
 ExplorationResult carryLanesThrough(const RoadGeometry& road_in, std::vector<CarriedLane> carried,
                                     const ExplorerOptions& o) {
-  o.validate();
-  if (road_in.polyline.size() < 2) throw LanesError("road " + std::to_string(road_in.road_id) + " has no polyline");
   if (carried.empty()) throw LanesError("road " + std::to_string(road_in.road_id) + ": no lanes to carry through");
-  ExplorationResult res;
-  res.road_id = road_in.road_id;
-  res.from_node = road_in.from_node;
-  res.to_node = road_in.to_node;
-  auto frame = std::make_shared<FrenetFrame>(road_in.polyline, o.frame_spacing_m, o.frame_smoothing_m);
-  res.frame = frame;
-  const RoadGeometry road = explorationStretch(road_in, frame->length(), o);
+  RoadGeometry road;
+  ExplorationResult res = startExploration(road_in, o, &road);
+  const FrenetFrame* frame = res.frame.get();
   if (!(road.s_end - road.s_begin > 1.0)) {
     throw LanesError("road " + std::to_string(road.road_id) + " has no length to carry lanes through");
   }

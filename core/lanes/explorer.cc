@@ -749,6 +749,24 @@ class ParticleFilter {
   std::vector<std::pair<double, int>> byD_;
 };
 
+// Removes the lanes whose drop[id] is set and renumbers the others (ids are indices), their split
+// and merge links with them (a link to a dropped lane is none).
+void dropLanes(const std::vector<bool>& drop, std::vector<Lane>* lanes) {
+  std::vector<int> new_id(lanes->size(), -1);
+  std::vector<Lane> kept;
+  for (auto& lane : *lanes) {
+    if (drop[lane.id]) continue;
+    new_id[lane.id] = static_cast<int>(kept.size());
+    kept.push_back(std::move(lane));
+  }
+  for (auto& lane : kept) {
+    lane.id = new_id[lane.id];
+    if (lane.split_from >= 0) lane.split_from = new_id[lane.split_from];
+    if (lane.merges_into >= 0) lane.merges_into = new_id[lane.merges_into];
+  }
+  *lanes = std::move(kept);
+}
+
 // Fit (METHOD.md section 4, step 4): the tracks long enough become lanes, each regressed as d(s)
 // (Eq. 6: piecewise linear with optimised break points, then a natural cubic spline); a lane that
 // began with the start strip is carried back to the road's start. Split and merge relations
@@ -813,19 +831,8 @@ std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const Ro
                                         density(lane) < o.weak_density_fraction * density(other));
     }
   }
-  std::vector<int> new_id(lanes.size(), -1);
-  std::vector<Lane> kept;
-  for (auto& lane : lanes) {
-    if (drop[lane.id]) continue;
-    new_id[lane.id] = static_cast<int>(kept.size());
-    kept.push_back(std::move(lane));
-  }
-  for (auto& lane : kept) {
-    lane.id = new_id[lane.id];
-    if (lane.split_from >= 0) lane.split_from = new_id[lane.split_from];
-    if (lane.merges_into >= 0) lane.merges_into = new_id[lane.merges_into];
-  }
-  return kept;
+  dropLanes(drop, &lanes);
+  return lanes;
 }
 
 // A lane whose centre line crosses observed drivable ground at under min_drivable_share of its
@@ -834,24 +841,16 @@ std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const Ro
 // the kerbs. Dropped, the others renumbered.
 void dropLanesOnNothing(const Raster& R, const ExplorerOptions& o, std::vector<Lane>* lanes) {
   if (o.min_drivable_share <= 0.0) return;
-  std::vector<int> new_id(lanes->size(), -1);
-  std::vector<Lane> kept;
-  for (auto& lane : *lanes) {
+  std::vector<bool> drop(lanes->size(), false);
+  for (const auto& lane : *lanes) {
     int n = 0, good = 0;
     for (double s = lane.s_begin; s <= lane.s_end; s += 1.0, ++n) {
       const int i = R.row(s), j = R.col(lane.centre.d(s));
       good += i >= 0 && i < R.ns && j >= 0 && j < R.nd && R.at(i, j) == kDrivable;
     }
-    if (n > 0 && good < o.min_drivable_share * n) continue;
-    new_id[lane.id] = static_cast<int>(kept.size());
-    kept.push_back(std::move(lane));
+    drop[lane.id] = n > 0 && good < o.min_drivable_share * n;
   }
-  for (auto& lane : kept) {
-    lane.id = new_id[lane.id];
-    if (lane.split_from >= 0) lane.split_from = new_id[lane.split_from];
-    if (lane.merges_into >= 0) lane.merges_into = new_id[lane.merges_into];
-  }
-  *lanes = std::move(kept);
+  dropLanes(drop, lanes);
 }
 
 // Probe one side (dir +1 left, -1 right) from (s, d) along the normal until a marking, curb,
@@ -1002,17 +1001,23 @@ void indexLanesFromLeft(std::vector<Lane>* lanes) {
 
 }  // namespace
 
-ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road_in, const ExplorerOptions& o,
-                              const std::optional<EgoPose>& ego, int history_stride) {
+ExplorationResult startExploration(const RoadGeometry& road_in, const ExplorerOptions& o, RoadGeometry* stretch) {
   o.validate();
   if (road_in.polyline.size() < 2) throw LanesError("road " + std::to_string(road_in.road_id) + " has no polyline");
   ExplorationResult res;
   res.road_id = road_in.road_id;
   res.from_node = road_in.from_node;
   res.to_node = road_in.to_node;
-  auto frame = std::make_shared<FrenetFrame>(road_in.polyline, o.frame_spacing_m, o.frame_smoothing_m);
-  res.frame = frame;
-  const RoadGeometry road = explorationStretch(road_in, frame->length(), o);
+  res.frame = std::make_shared<FrenetFrame>(road_in.polyline, o.frame_spacing_m, o.frame_smoothing_m);
+  *stretch = explorationStretch(road_in, res.frame->length(), o);
+  return res;
+}
+
+ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road_in, const ExplorerOptions& o,
+                              const std::optional<EgoPose>& ego, int history_stride) {
+  RoadGeometry road;
+  ExplorationResult res = startExploration(road_in, o, &road);
+  const FrenetFrame* frame = res.frame.get();
   const double s_stop = road.s_end;
   double s_start = road.s_begin;
   if (ego) s_start = std::clamp(frame->toFrenet(ego->position).x(), s_start, s_stop);

@@ -139,6 +139,12 @@ RoadGeometry explorationStretch(const RoadGeometry& road, double length, const E
 
 // Runs Algorithm 1 on a road's BEV grid. Deterministic for options.seed. Throws LanesError on a
 // degenerate road (a polyline under 1 m long).
+// What every way of finding a road's lanes starts with (exploreRoad, carryLanesThrough): options
+// validated (throws LanesError), the road's ids and Frenet frame in an empty result, and in
+// *stretch the stretch the lanes run over (explorationStretch). Throws LanesError for a road
+// without a polyline.
+ExplorationResult startExploration(const RoadGeometry& road, const ExplorerOptions& options, RoadGeometry* stretch);
+
 ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road, const ExplorerOptions& options,
                               const std::optional<EgoPose>& ego = std::nullopt, int history_stride = 0);
 

@@ -12,7 +12,7 @@
 #include "core/osm/osm_data.h"
 #include "core/sim/world_builder.h"
 #include "core/skeleton/skeleton.h"
-#include "tests/common/sim_drive.h"
+#include "tests/common/truth_world.h"
 
 #include <gtest/gtest.h>
 
@@ -24,9 +24,8 @@ namespace {
 using namespace lanemap;
 
 struct Fixture {
-  osm::OsmData data;
-  std::unique_ptr<skeleton::Skeleton> sk;
-  std::unique_ptr<sim::SimWorld> world;
+  const lanemap::testing::TruthWorld* w = nullptr;  // West Oakland, seed 3
+  const sim::SimWorld* world = nullptr;
   map::LaneMap built;  // truth road lanelets + our intersections
   size_t fragments = 0, connections = 0, quadratic = 0;
 };
@@ -34,13 +33,10 @@ struct Fixture {
 const Fixture& fixture() {
   static const Fixture f = [] {
     Fixture f;
-    f.data = osm::readOsm(lanemap::testing::dataPath("osm/west-oakland.osm"));
-    f.sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(f.data));
-    sim::WorldOptions wo;
-    wo.seed = 3;
-    f.world = sim::buildWorld(*f.sk, wo);
+    f.w = &lanemap::testing::westOaklandTruthWorld();
+    f.world = f.w->world.get();
     const map::LaneMap& truth = f.world->truth();
-    const auto roads = intersections::roadsOf(truth);
+    const auto& roads = f.w->roads;
     f.built.origin_lat = truth.origin_lat;
     f.built.origin_lon = truth.origin_lon;
     f.built.origin_alt = truth.origin_alt;
@@ -60,7 +56,7 @@ const Fixture& fixture() {
         f.built.lanelets.push_back(ll);
       }
     }
-    for (const auto& r : intersections::buildIntersections(*f.sk, roads, {}, f.data.restrictions)) {
+    for (const auto& r : intersections::buildIntersections(*f.w->sk, roads, {}, f.w->data.restrictions)) {
       ++f.fragments;
       f.connections += r.connections.size();
       for (const auto& c : r.connections) f.quadratic += c.quadratic ? 1 : 0;

@@ -9,12 +9,8 @@
 #include "core/mapping/carried_lanes.h"
 #include "core/mapping/road_lanes.h"
 
-#include "core/intersections/intersections.h"
 #include "core/lanes/frenet.h"
-#include "core/osm/osm_data.h"
-#include "core/sim/world_builder.h"
-#include "core/skeleton/skeleton.h"
-#include "tests/common/sim_drive.h"
+#include "tests/common/truth_world.h"
 #include "tests/lanes/synthetic_bev.h"
 
 #include <gtest/gtest.h>
@@ -30,24 +26,7 @@
 namespace lanemap {
 namespace {
 
-struct World {
-  osm::OsmData data;
-  std::unique_ptr<skeleton::Skeleton> sk;
-  std::map<int64_t, map::LaneMap> roads;  // the truth's road lanelets by road id
-};
-
-const World& westOakland() {
-  static const World w = [] {
-    World w;
-    w.data = osm::readOsm(lanemap::testing::dataPath("osm/west-oakland.osm"));
-    w.sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(w.data));
-    sim::WorldOptions wo;
-    wo.seed = 3;
-    w.roads = intersections::roadsOf(sim::buildWorld(*w.sk, wo)->truth());
-    return w;
-  }();
-  return w;
-}
+using World = lanemap::testing::TruthWorld;
 
 // Lateral offsets (road frame) of a road's truth lanes where `s` is.
 std::vector<double> truthOffsets(const map::LaneMap& m, const lanes::FrenetFrame& frame, double s) {
@@ -76,7 +55,7 @@ size_t laneCount(const map::LaneMap& m) {
 }
 
 TEST(CarriedLanes, TheLanesOfTheRoadBeforeLieOnTheTruthOfEveryRoadThatRunsStraightOn) {
-  const World& w = westOakland();
+  const World& w = lanemap::testing::westOaklandTruthWorld();
   lanes::ExplorerOptions o;
   o.carry_lanes_max_m = 1e9;  // every road as if short: West Oakland's are long, their truth is known
   int compared = 0, turns = 0, shorts = 0;

@@ -10,7 +10,7 @@
 #include "core/osm/osm_data.h"
 #include "core/sim/world_builder.h"
 #include "core/skeleton/skeleton.h"
-#include "tests/common/sim_drive.h"
+#include "tests/common/truth_world.h"
 
 #include <gtest/gtest.h>
 
@@ -24,25 +24,9 @@ namespace {
 
 using namespace lanemap;
 
-struct World {
-  osm::OsmData data;
-  std::unique_ptr<skeleton::Skeleton> sk;
-  std::map<int64_t, map::LaneMap> roads;  // the truth's road lanelets by road id
-};
+using World = lanemap::testing::TruthWorld;
 
-const World& world() {
-  static const World w = [] {
-    World w;
-    w.data = osm::readOsm(lanemap::testing::dataPath("osm/west-oakland.osm"));
-    w.sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(w.data));
-    sim::WorldOptions wo;
-    wo.seed = 3;
-    const auto sim_world = sim::buildWorld(*w.sk, wo);
-    w.roads = intersections::roadsOf(sim_world->truth());
-    return w;
-  }();
-  return w;
-}
+const World& world() { return lanemap::testing::westOaklandTruthWorld(); }
 
 // The map as the assembler built it before it was incremental: every road's lanelets, then every
 // intersection rebuilt from all roads and appended one at a time.

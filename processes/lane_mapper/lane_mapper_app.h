@@ -78,10 +78,12 @@ class LaneMapperApp {
     write_options_.speed_limit_kmh_by_road = io::speedLimitsKmh(*sk_);  // OSM maxspeed
     io::createDirectories((fs::path(store_) / "lanes").string());
     reloadStore();
-    catchUp();
-    worker_ = std::thread([this] { work(); });
+    // Subscribed before the store is searched for roads announced while it was down: a road
+    // announced between the two is then queued twice (mapped once: onBevRoad), never missed.
     auto* sub = process_.lcm().subscribe(channel, &LaneMapperApp::onBevRoad, this);
     sub->setQueueCapacity(queue);
+    catchUp();
+    worker_ = std::thread([this] { work(); });
     process_.setIdleCheck([this] {  // process replay: wait for the worker after each input
       std::lock_guard<std::mutex> lock(mutex_);
       return jobs_.empty() && !busy_ && !export_pending_;
@@ -109,6 +111,10 @@ class LaneMapperApp {
     process_.counters().add("bev_roads_received");
     {
       std::lock_guard<std::mutex> lock(mutex_);
+      const bool queued = std::any_of(jobs_.begin(), jobs_.end(), [&](const Job& j) {
+        return j.road.road_id == msg->road_id && j.road.path == msg->path;  // caught up at the start, not mapped yet
+      });
+      if (queued) return;
       jobs_.push_back(Job{*msg, rbuf->recv_utime});
       process_.counters().set("queue_length", static_cast<int64_t>(jobs_.size()));
     }

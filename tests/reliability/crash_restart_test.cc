@@ -21,6 +21,7 @@
 // private network namespace.
 #include "core/eval/evaluate.h"
 #include "core/io/lanelet2.h"
+#include "lanemap/bev_road_t.hpp"
 #include "lanemap/pose_t.hpp"
 #include "lanemap/status_t.hpp"
 #include "tests/bev/bev_replay.h"
@@ -88,6 +89,8 @@ struct Watch {
     if (!first_pose) first_pose = m->utime;
     last_pose = m->utime;
   }
+  int64_t bev_roads = 0;  // BEV_ROAD announcements seen
+  void onBevRoad(const lcm::ReceiveBuffer*, const std::string&, const lanemap::bev_road_t*) { ++bev_roads; }
   int64_t frames_missed = 0;  // the BEV builder's: frames lost on the bus (a gap in their seq)
   void onStatus(const lcm::ReceiveBuffer*, const std::string&, const lanemap::status_t* s) {
     if (s->process == "bev_builder") {
@@ -103,6 +106,7 @@ struct Watch {
 struct GraphRun {
   std::string store;
   bool killed = false;
+  int64_t bev_roads_before_kill = 0;
   Watch watch;
 };
 
@@ -125,9 +129,14 @@ GraphRun runGraph(const std::string& drive, const std::string& dir, double kill_
   EXPECT_TRUE(lcm.good());
   lcm.subscribe("POSE", &Watch::onPose, &run.watch);
   lcm.subscribe("STATUS", &Watch::onStatus, &run.watch);
+  lcm.subscribe("BEV_ROAD", &Watch::onBevRoad, &run.watch);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(180);
   while (std::chrono::steady_clock::now() < deadline) {
+    // Every message waiting, not one per turn: POSE comes at the camera's rate and more, and a
+    // watcher one message a turn falls behind the drive (a kill "at 13 s" fell seconds late).
     lcm.handleTimeout(50);
+    while (lcm.handleTimeout(0) > 0) {
+    }
     const bool due = kill_at_s > 0 && !run.killed && run.watch.first_pose && run.watch.bev_pid > 0 &&
                      run.watch.last_pose - run.watch.first_pose >= static_cast<int64_t>(kill_at_s * 1e6);
     if (due && at_checkpoint && !checkpoint_before) checkpoint_before = newestCheckpoint(run.store);
@@ -136,6 +145,7 @@ GraphRun runGraph(const std::string& drive, const std::string& dir, double kill_
                   (run.watch.last_pose - run.watch.first_pose) * 1e-6);
       EXPECT_EQ(::kill(run.watch.bev_pid, SIGKILL), 0);
       run.killed = true;
+      run.bev_roads_before_kill = run.watch.bev_roads;
     }
     if (graph.waitExit(std::chrono::milliseconds(5)) != -2) break;
   }
@@ -198,6 +208,9 @@ TEST(CrashRestart, AKilledProcessLosesNoRoadAndNoLane) {
         runGraph(drive, out.str("killed-" + std::to_string(k++)), kill.at_s, kill.process, kill.labels, kill.process == "bev_builder");
     ASSERT_TRUE(run.killed);
     EXPECT_EQ(run.watch.bev_pids.size(), 2u) << "restarted by the launcher";
+    if (kill.process == "lane_mapper") {  // what the test is about: the road was announced while it was down
+      EXPECT_EQ(run.bev_roads_before_kill, 0) << "killed after the first road's BEV_ROAD: the kill came late";
+    }
     if (kill.recovered) {
       EXPECT_EQ(counterOf(run, kill.recovered, 0), 1);
     }

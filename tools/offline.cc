@@ -325,15 +325,18 @@ class OfflineMapper {
   }
 
   // Explores one road's evidence (as far as partial->station_m when given) and sets its lanes.
-  void exploreAndSet(int64_t road_id, const bev::BevGrid& grid, const std::optional<map::PartialRoad>& partial) {
+  // A short road left with no lane waits (awaiting_) for a road meeting it to get lanes, and is
+  // mapped again then (`again`: its summary entry replaced, not counted twice).
+  void exploreAndSet(int64_t road_id, const bev::BevGrid& grid, const std::optional<map::PartialRoad>& partial, bool again = false) {
     const auto* r = sk_.road(road_id);
     if (!r) return;
     nlohmann::json entry = {{"road_id", road_id}, {"from", r->from}, {"to", r->to}, {"drive", drives_}};
+    bool has_lanes = false;
     if (partial) entry["partial"] = {{"station_m", partial->station_m}, {"road_length_m", partial->road_length_m}};
     try {
       const auto geometry = partial ? mapping::drivenStretch(*r, partial->station_m, explorer_) : lanes::RoadGeometry::fromSkeleton(*r);
       int64_t before = -1;
-      const auto carried = mapping::lanesLeadingInto(sk_, *r, assembler_.roads(), explorer_, &before);
+      const auto carried = mapping::lanesRunningThrough(sk_, *r, assembler_.roads(), explorer_, &before);
       auto [res, lanes_of_road, dropped, carried_in] =
           mapping::exploreRoadLanes(grid, geometry, partial, explorer_, sk_.frame().origin(), carried);
       if (carried_in) entry["lanes_carried_from"] = before;
@@ -341,7 +344,13 @@ class OfflineMapper {
       if (!dropped.empty()) entry["lanes_dropped"] = dropped;
       crosswalks_[road_id] = lanes::findCrosswalks(grid, lanes_of_road, 1);
       assembler_.setRoad(road_id, std::move(lanes_of_road));
-      ++roads_mapped_;
+      has_lanes = !res.lanes.empty();
+      if (!partial && !has_lanes && mapping::isShortRoad(*r, explorer_)) {
+        awaiting_.insert_or_assign(road_id, grid);
+      } else {
+        awaiting_.erase(road_id);
+      }
+      if (!again) ++roads_mapped_;
       entry["lanes"] = res.lanes.size();
       if (!o_.quiet) {
         std::fprintf(stderr, "\rlanemap-offline: road %lld: %zu lanes%s%20s\n", static_cast<long long>(road_id), res.lanes.size(),
@@ -356,7 +365,21 @@ class OfflineMapper {
     } catch (const std::exception& e) {
       return fail(road_id, entry, e);
     }
-    road_log_.push_back(std::move(entry));
+    auto logged = std::find_if(road_log_.rbegin(), road_log_.rend(), [&](const nlohmann::json& e) { return e.at("road_id") == road_id; });
+    if (again && logged != road_log_.rend()) {
+      *logged = std::move(entry);
+    } else {
+      road_log_.push_back(std::move(entry));
+    }
+    if (!has_lanes) return;
+    std::set<int64_t> awaiting;
+    for (const auto& [id, g] : awaiting_) awaiting.insert(id);
+    for (int64_t id : mapping::roadsAwaitingLanesFrom(sk_, road_id, awaiting)) {
+      auto it = awaiting_.find(id);
+      if (it == awaiting_.end()) continue;  // given lanes by one mapped again before it
+      const bev::BevGrid g = it->second;
+      exploreAndSet(id, g, std::nullopt, true);
+    }
   }
 
   void fail(int64_t road_id, nlohmann::json& entry, const std::exception& e) {
@@ -394,6 +417,7 @@ class OfflineMapper {
   int drives_ = 0;
   int64_t frames_projected_ = 0, frames_mesh_ = 0;
   std::map<int64_t, std::vector<map::Crosswalk>> crosswalks_;  // by road, from its BEV
+  std::map<int64_t, bev::BevGrid> awaiting_;  // short roads mapped with no lane, their evidence (exploreAndSet)
 
  public:
   std::vector<map::Crosswalk> crosswalks() const {

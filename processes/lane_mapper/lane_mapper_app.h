@@ -56,6 +56,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 
@@ -184,7 +185,7 @@ class LaneMapperApp {
     std::vector<lanes::CarriedLane> carried;  // a short road's lanes may run on from the road before
     {
       std::lock_guard<std::mutex> lock(roads_mutex_);
-      carried = mapping::lanesLeadingInto(*sk_, *road, assembler_->roads(), options_);
+      carried = mapping::lanesRunningThrough(*sk_, *road, assembler_->roads(), options_);
     }
     auto [res, m, dropped, carried_in] =
         mapping::exploreRoadLanes(grid, geometry, driven_to, options_, sk_->frame().origin(), carried);
@@ -213,6 +214,29 @@ class LaneMapperApp {
     process_.counters().add("lanes_found", static_cast<int64_t>(res.lanes.size()));
     if (export_interval_ == Clock::duration::zero()) exportWholeMap();  // before LANE_MAP: its map_path holds the road
     publish(job.road_id, m, job.utime);
+    awaitLanes(*road, !res.lanes.empty(), partial.has_value());
+  }
+
+  // A short road mapped with no lane (nothing explored, no mapped road beside it to carry from)
+  // waits; when a road meeting it gets lanes it is mapped again (core/mapping/carried_lanes.h).
+  void awaitLanes(const skeleton::AtomicRoad& road, bool has_lanes, bool partial) {
+    if (!has_lanes) {
+      if (!partial && mapping::isShortRoad(road, options_)) awaiting_.insert(road.id);
+      return;
+    }
+    awaiting_.erase(road.id);
+    const auto again = mapping::roadsAwaitingLanesFrom(*sk_, road.id, awaiting_);
+    if (again.empty()) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (int64_t id : again) {
+      Job job;
+      job.road.road_id = id;
+      job.road.path = bev::roadGridPath(store_, id);
+      job.road.utime = nowUtime();
+      job.recv_utime = nowUtime();
+      jobs_.push_back(job);
+      process_.counters().add("roads_mapped_again");
+    }
   }
 
   std::string roadFile(int64_t id) const { return (fs::path(store_) / "lanes" / ("road_" + std::to_string(id) + ".osm")).string(); }
@@ -262,7 +286,12 @@ class LaneMapperApp {
     const bool have_map = !ec;
     for (const auto& [id, path] : bev::roadFiles((fs::path(store_) / "lanes").string(), ".osm")) {
       try {
-        assembler_->setRoad(id, io::readLanelet2(path, o.lat, o.lon, ro));
+        auto lanes = io::readLanelet2(path, o.lat, o.lon, ro);
+        const skeleton::AtomicRoad* road = sk_->road(id);
+        if (road && lanes.lanelets.empty() && mapping::isShortRoad(*road, options_) && fs::exists(bev::roadGridPath(store_, id), ec)) {
+          awaiting_.insert(id);  // mapped with no lane before the restart: still waits for a road beside it
+        }
+        assembler_->setRoad(id, std::move(lanes));
         process_.counters().add("roads_loaded");
         if (!have_map || fs::last_write_time(path, ec) > map_time) export_pending_ = true;  // lane_map.osm lacks it
       } catch (const std::exception& e) {
@@ -323,6 +352,7 @@ class LaneMapperApp {
   };
   std::deque<Job> jobs_;
   double map_road_ms_max_ = 0.0;  // worker thread only
+  std::set<int64_t> awaiting_;    // short roads mapped with no lane (awaitLanes; worker thread, and the constructor)
   double export_ms_max_ = 0.0;    // worker thread, then the destructor
   bool stop_ = false;
   bool busy_ = false;  // the worker is mapping a job or exporting (under mutex_)

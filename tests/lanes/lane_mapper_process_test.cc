@@ -3,8 +3,10 @@
 // LANE_MAP must carry our direction's two lanes at the painted centre lines, the store must hold
 // the road's Lanelet2 file and the whole map; a bad grid is counted and the process goes on; a
 // restarted process republishes the stored road without any input.
+#include "core/bev/bev_grid.h"
 #include "core/bev/bev_store.h"
 #include "core/io/lanelet2.h"
+#include "core/lanes/explorer.h"
 #include "core/lanes/frenet.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
@@ -324,6 +326,106 @@ TEST(LaneMapperProcess, ExportIntervalWritesTheWholeMapAtMostThatOftenAndAtStop)
   }
   EXPECT_EQ(lanes_of[road->id], 2);
   EXPECT_EQ(lanes_of[back->id], 2);
+}
+
+// A short road (issue 16) whose BEV shows nothing drivable is mapped with no lane when it closes:
+// the road before it was not mapped (the car turned into it) and the road after it is closed
+// later. When the road after gets its lanes, the short road is mapped again and takes them
+// (core/mapping/carried_lanes.h lanesLeadingOutOf): STATUS roads_mapped_again, its LANE_MAP
+// again with the road after's two lanes at their offsets from the OSM line.
+TEST(LaneMapperProcess, AShortRoadMappedWithNoLaneTakesTheLanesOfTheRoadAfterOnceItIsMapped) {
+  if (!lanemap::testing::inPrivateNetns()) {
+    ASSERT_EQ(lanemap::testing::rerunInPrivateNetns(), 0);
+    return;
+  }
+  const skeleton::Skeleton sk = skeleton::Skeleton::build(osm::readOsm(kOsm));
+  const skeleton::AtomicRoad* after = straightRoad(sk);
+  ASSERT_NE(after, nullptr);
+  // The road leading straight into it (West Oakland's roads are long: the test's config takes any
+  // road as short).
+  const skeleton::AtomicRoad* link = nullptr;
+  for (int64_t id : sk.intersection(after->from)->incoming) {
+    const skeleton::AtomicRoad* r = sk.road(id);
+    if (r->id == after->reverse_id || r->reverse_id < 0 || r->polyline.size() < 2) continue;
+    const Eigen::Vector2d a = (r->polyline.back() - r->polyline[r->polyline.size() - 2]).normalized();
+    const Eigen::Vector2d b = (after->polyline[1] - after->polyline.front()).normalized();
+    if (a.dot(b) > std::cos(0.2)) link = r;
+  }
+  ASSERT_NE(link, nullptr) << "no road runs straight into road " << after->id;
+  lanemap::testing::TempDir tmp("lane-mapper-carry");
+  const std::string store = tmp.str("store");
+  const std::string config = tmp.str("lane_mapper.yaml");
+  {
+    std::string yaml = lanemap::testing::readFile(kConfig);
+    const std::string key = "carry_lanes_max_m: 15.0 ";
+    const auto at = yaml.find(key);
+    ASSERT_NE(at, std::string::npos) << "config/lane_mapper.yaml has no `" << key << "`";
+    yaml.replace(at, key.size(), "carry_lanes_max_m: 100000 ");
+    std::ofstream(config) << yaml;
+  }
+  // The grids where the BEV builder stores them (the mapper reads the link's there again), each
+  // written just before its BEV_ROAD (written before the start, the mapper would catch them up):
+  // the link's observed ground with nothing drivable, the road after's two lanes a direction.
+  const std::string link_grid = bev::roadGridPath(store, link->id);
+  bev::BevGrid empty;
+  {
+    const Eigen::Vector2d a = link->polyline.front(), b = link->polyline.back();
+    for (double t = 0; t <= 1.0; t += 0.05 / (b - a).norm()) {
+      const Eigen::Vector2d p = a + t * (b - a), n = Eigen::Vector2d(a.y() - b.y(), b.x() - a.x()).normalized();
+      for (double d = -12.0; d <= 12.0; d += 0.05) empty.add(empty.cellOf(p + d * n), bev::Layer::kObserved, 4);
+    }
+  }
+  const std::string after_grid = bev::roadGridPath(store, after->id);
+  const auto layout = twoByTwo(*after);
+
+  const std::string url = lanemap::testing::testUdpmUrl(7695);
+  lcm::LCM lcm(url);
+  ASSERT_TRUE(lcm.good());
+  Collector c(lcm);
+  const auto mapsOf = [&](int64_t id) {
+    std::vector<lane_map_t> out;
+    for (const auto& m : c.maps) {
+      if (m.id == id) out.push_back(m);
+    }
+    return out;
+  };
+  {
+    lanemap::testing::ChildProcess proc({kBinary, "--config", config, "--osm", kOsm, "--store", store, "--lcm-url", url});
+    ASSERT_TRUE(proc.started());
+    ASSERT_TRUE(waitFor(lcm, [&] { return !c.status.empty(); }, 20)) << "no STATUS from lanemap-lane-mapper";
+    fs::create_directories(fs::path(link_grid).parent_path());
+    empty.save(link_grid);
+    const bev_road_t first = bevRoad(*link, link_grid);
+    lcm.publish("BEV_ROAD", &first);
+    ASSERT_TRUE(waitFor(lcm, [&] { return mapsOf(link->id).size() == 1; }, 30)) << "no LANE_MAP of the link";
+    EXPECT_EQ(mapsOf(link->id)[0].num_lanes, 0) << "nothing drivable, nothing to carry yet";
+    lanes::testing::paint(layout).save(after_grid);
+    const bev_road_t second = bevRoad(*after, after_grid);
+    lcm.publish("BEV_ROAD", &second);
+    ASSERT_TRUE(waitFor(lcm, [&] { return mapsOf(link->id).size() == 2; }, 30)) << "the link was not mapped again";
+    ASSERT_TRUE(waitFor(lcm, [&] { return statusCounter(c.status.back(), "roads_mapped") == 3; }, 5));
+    EXPECT_EQ(statusCounter(c.status.back(), "roads_mapped_again"), 1);
+    EXPECT_EQ(statusCounter(c.status.back(), "roads_lanes_carried"), 1);
+    EXPECT_GE(proc.stop(), 0);
+  }
+  ASSERT_EQ(mapsOf(after->id).size(), 1u);
+  ASSERT_EQ(mapsOf(after->id)[0].num_lanes, 2);
+  const lane_map_t carried = mapsOf(link->id)[1];
+  ASSERT_EQ(carried.num_lanes, 2);
+  // Each carried lane at the road after's lane's offset (-1.85, -5.35 m right of the painted
+  // line, which is the road after's OSM line) from the link's own OSM line.
+  const lanes::ExplorerOptions eo;
+  const lanes::FrenetFrame frame(link->polyline, eo.frame_spacing_m, eo.frame_smoothing_m);
+  for (const auto& lane : carried.lanes) {
+    const double truth = lane.index_from_left == 0 ? -1.85 : -5.35;
+    for (int i = 0; i < lane.centre.num_points; ++i) {
+      const Eigen::Vector2d sd = frame.toFrenet(Eigen::Vector2d(lane.centre.east[i], lane.centre.north[i]));
+      EXPECT_NEAR(sd.y(), truth, 0.35) << "lane " << lane.index_from_left << " point " << i;
+    }
+  }
+  // In the store: the link's file holds them.
+  const auto& o = sk.frame().origin();
+  EXPECT_EQ(io::readLanelet2(store + "/lanes/road_" + std::to_string(link->id) + ".osm", o.lat, o.lon).lanelets.size(), 2u);
 }
 
 TEST(LaneMapperProcess, FailsClearlyWithoutAnOsmFile) {

@@ -2,9 +2,9 @@
 // carried_lanes.h). A 12 m link between two junctions seen only from inside them has no drivable
 // cell: exploring it finds nothing, and it takes the lanes of the road leading straight into it.
 // On the simulator's West Oakland world (its truth's road lanelets standing for mapped roads),
-// the lanes carried into every road whose road before runs straight on with as many lanes lie on
-// that road's own truth lanes; a turn carries nothing; a road where exploring found lanes keeps
-// them.
+// the lanes carried into every road whose road before (or after) runs straight on with as many
+// lanes lie on that road's own truth lanes; a turn carries nothing; a road where exploring found
+// lanes keeps them.
 #include "core/lanes/carried_lanes.h"
 #include "core/mapping/carried_lanes.h"
 #include "core/mapping/road_lanes.h"
@@ -54,7 +54,13 @@ size_t laneCount(const map::LaneMap& m) {
   return idx.size();
 }
 
-TEST(CarriedLanes, TheLanesOfTheRoadBeforeLieOnTheTruthOfEveryRoadThatRunsStraightOn) {
+// The lanes carried into every road from the road before it (or after it) that runs straight on
+// with as many lanes lie on the road's own truth lanes, at the end they come through.
+enum class From { kBefore, kAfter };
+
+void carriedLanesLieOnTheTruth(From from) {
+  const bool before_it = from == From::kBefore;
+  const auto carry = before_it ? &mapping::lanesLeadingInto : &mapping::lanesLeadingOutOf;
   const World& w = lanemap::testing::westOaklandTruthWorld();
   lanes::ExplorerOptions o;
   o.carry_lanes_max_m = 1e9;  // every road as if short: West Oakland's are long, their truth is known
@@ -65,17 +71,22 @@ TEST(CarriedLanes, TheLanesOfTheRoadBeforeLieOnTheTruthOfEveryRoadThatRunsStraig
     std::map<int64_t, map::LaneMap> others = w.roads;
     others.erase(road.id);  // the road itself is not mapped yet
     int64_t before = -1;
-    const auto carried = mapping::lanesLeadingInto(*w.sk, road, others, o, &before);
+    const auto carried = carry(*w.sk, road, others, o, &before);
     if (carried.empty()) {
-      // Roads ending at its start that are mapped but all turn into it: nothing carried.
-      const auto* start = w.sk->intersection(road.from);
-      for (int64_t id : start->incoming) turns += id != road.reverse_id && w.roads.count(id) > 0;
+      // Roads meeting it at that end that are mapped but all turn: nothing carried.
+      const auto* junction = w.sk->intersection(before_it ? road.from : road.to);
+      for (int64_t id : before_it ? junction->incoming : junction->outgoing) turns += id != road.reverse_id && w.roads.count(id) > 0;
       continue;
     }
     ASSERT_GE(before, 0);
     EXPECT_NE(before, road.reverse_id);
+    if (before_it) {  // what a short road takes: the road before's lanes first
+      int64_t via = -1;
+      EXPECT_EQ(mapping::lanesRunningThrough(*w.sk, road, others, o, &via).size(), carried.size());
+      EXPECT_EQ(via, before);
+    }
     const bool short_road = road.s_end - road.s_begin < lanes::ExplorerOptions{}.carry_lanes_max_m;
-    EXPECT_EQ(mapping::lanesLeadingInto(*w.sk, road, others, lanes::ExplorerOptions{}).size(), short_road ? carried.size() : 0)
+    EXPECT_EQ(carry(*w.sk, road, others, lanes::ExplorerOptions{}, nullptr).size(), short_road ? carried.size() : 0)
         << "road " << road.id << ": with the shipped options only a short road is looked at";
     shorts += short_road;
     if (laneCount(w.roads.at(before)) != laneCount(own->second)) continue;  // offsets move with the count
@@ -85,14 +96,15 @@ TEST(CarriedLanes, TheLanesOfTheRoadBeforeLieOnTheTruthOfEveryRoadThatRunsStraig
     for (size_t k = 0; k < r.lanes.size(); ++k) {
       const lanes::Lane& lane = r.lanes[k];
       EXPECT_EQ(lane.index_from_left, static_cast<int>(k));
+      const double s = before_it ? lane.s_begin : lane.s_end;  // its end by the junction it came through
       if (k > 0) {
-        EXPECT_LT(lane.centre.d(lane.s_begin), r.lanes[k - 1].centre.d(lane.s_begin)) << "left to right";
+        EXPECT_LT(lane.centre.d(s), r.lanes[k - 1].centre.d(s)) << "left to right";
       }
-      // The lane's start (by the junction it came through) on a truth lane of this road.
-      const auto truth = truthOffsets(own->second, *r.frame, lane.s_begin);
+      // There, on a truth lane of this road.
+      const auto truth = truthOffsets(own->second, *r.frame, s);
       ASSERT_FALSE(truth.empty()) << "road " << road.id;
       double nearest = INFINITY;
-      for (double d : truth) nearest = std::min(nearest, std::abs(d - lane.centre.d(lane.s_begin)));
+      for (double d : truth) nearest = std::min(nearest, std::abs(d - lane.centre.d(s)));
       EXPECT_LT(nearest, 0.25) << "road " << road.id << " lane " << k << " carried from road " << before;
       // Its bounds a lane's width apart.
       EXPECT_GT(lane.left.d.front() - lane.right.d.front(), 2.5) << "road " << road.id;
@@ -101,10 +113,14 @@ TEST(CarriedLanes, TheLanesOfTheRoadBeforeLieOnTheTruthOfEveryRoadThatRunsStraig
     }
     ++compared;
   }
-  std::printf("roads compared: %d (%d short); mapped roads turning into a road: %d\n", compared, shorts, turns);
+  std::printf("%s: roads compared: %d (%d short); mapped roads turning at that end: %d\n", before_it ? "before" : "after", compared, shorts, turns);
   EXPECT_GE(compared, 20);
   EXPECT_GT(turns, 0);
 }
+
+TEST(CarriedLanes, TheLanesOfTheRoadBeforeLieOnTheTruthOfEveryRoadThatRunsStraightOn) { carriedLanesLieOnTheTruth(From::kBefore); }
+
+TEST(CarriedLanes, TheLanesOfTheRoadAfterLieOnTheTruthOfEveryRoadThatRunsStraightOn) { carriedLanesLieOnTheTruth(From::kAfter); }
 
 lanes::RoadGeometry link(double length, double roi) {
   lanes::RoadGeometry g;

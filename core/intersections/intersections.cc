@@ -9,7 +9,6 @@
 #include <cmath>
 #include <limits>
 #include <set>
-#include <sstream>
 #include <unordered_map>
 
 namespace lanemap::intersections {
@@ -495,42 +494,13 @@ std::vector<std::pair<int, int>> pairLanes(const std::vector<Movements>& in_lane
   return out;
 }
 
-Movements parseTurnLane(const std::string& entry) {
-  Movements m;
-  std::stringstream ss(entry);
-  std::string tok;
-  while (std::getline(ss, tok, ';')) {
-    tok.erase(0, tok.find_first_not_of(' '));
-    tok.erase(tok.find_last_not_of(' ') + 1);
-    if (tok.empty() || tok == "none") continue;
-    if (tok == "reverse") {
-      m.reverse = m.specified = true;
-    } else if (tok.find("merge") != std::string::npos || tok == "through") {
-      m.straight = m.specified = true;
-    } else if (tok.find("left") != std::string::npos) {
-      m.left = m.specified = true;
-    } else if (tok.find("right") != std::string::npos) {
-      m.right = m.specified = true;
-    }
-  }
-  return m;
-}
-
 std::vector<Movements> turnLanes(const skeleton::AtomicRoad& road) {
   std::string key = "turn:lanes";
   if (road.reverse_id >= 0) key = road.along_way ? "turn:lanes:forward" : "turn:lanes:backward";
   const auto it = road.tags.find(key);
   std::vector<Movements> out;
   if (it == road.tags.end() || it->second.empty()) return out;
-  std::string cur;
-  for (char ch : it->second + "|") {
-    if (ch == '|') {
-      out.push_back(parseTurnLane(cur));
-      cur.clear();
-    } else {
-      cur += ch;
-    }
-  }
+  for (const auto& entry : osm::splitTurnLanes(it->second)) out.push_back(osm::parseTurnLane(entry));
   return out;
 }
 

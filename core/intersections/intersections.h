@@ -28,6 +28,7 @@
 #include "core/intersections/curve.h"
 #include "core/map/lane_map.h"
 #include "core/osm/osm_data.h"
+#include "core/osm/turn_lanes.h"
 #include "core/skeleton/skeleton.h"
 
 #include <yaml-cpp/yaml.h>
@@ -85,11 +86,8 @@ struct IntersectionOptions {
 inline constexpr int64_t kIdBase = 1000000000000;  // 1e12
 
 // turn:lanes of one lane (OSM `turn:lanes` entry, e.g. "left;through").
-struct Movements {
-  bool specified = false;  // false for "", "none"
-  bool left = false, straight = false, right = false, reverse = false;
-};
-Movements parseTurnLane(const std::string& entry);
+using Movements = osm::LaneMovements;  // one lane's turn:lanes entry (core/osm/turn_lanes.h)
+using osm::parseTurnLane;
 // The turn:lanes entries of a road in its driving direction, left to right; empty when untagged.
 std::vector<Movements> turnLanes(const skeleton::AtomicRoad& road);
 

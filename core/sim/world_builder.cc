@@ -17,6 +17,7 @@
 #include "core/intersections/curve.h"
 #include "core/io/lanelet2_orientation.h"
 #include "core/map/simplify.h"
+#include "core/osm/turn_lanes.h"
 #include "core/sim/world_geometry.h"
 #include "core/sim/world_scene.h"
 
@@ -25,7 +26,6 @@
 #include <map>
 #include <random>
 #include <set>
-#include <sstream>
 #include <unordered_map>
 
 namespace lanemap::sim {
@@ -71,38 +71,6 @@ std::string baseClass(const std::string& highway) {
 bool isMajor(const std::string& c) { return c == "primary" || c == "secondary" || c == "tertiary" || c == "trunk"; }
 bool isMinorStreet(const std::string& c) {
   return c == "residential" || c == "tertiary" || c == "unclassified" || c == "living_street";
-}
-
-std::vector<std::string> splitBar(const std::string& s) {
-  std::vector<std::string> out;
-  std::string cur;
-  for (char ch : s) {
-    if (ch == '|') {
-      out.push_back(cur);
-      cur.clear();
-    } else {
-      cur += ch;
-    }
-  }
-  out.push_back(cur);
-  return out;
-}
-
-// Which movements a turn:lanes entry allows (L, S, R); unspecified when empty / none.
-struct Movements {
-  bool specified = false, left = false, straight = false, right = false;
-};
-Movements parseMovements(const std::string& entry) {
-  Movements m;
-  if (entry.empty() || entry == "none") return m;
-  std::stringstream ss(entry);
-  std::string tok;
-  while (std::getline(ss, tok, ';')) {
-    if (tok.find("left") != std::string::npos && tok.find("merge") == std::string::npos) m.left = m.specified = true;
-    else if (tok.find("right") != std::string::npos && tok.find("merge") == std::string::npos) m.right = m.specified = true;
-    else if (tok == "through" || tok.find("merge") != std::string::npos) m.straight = m.specified = true;
-  }
-  return m;
 }
 
 enum class Edge { kNone, kParking, kBike };
@@ -184,7 +152,7 @@ struct LaneEnd {
   Vector2d centre, left, right, tangent;  // tangent in the driving direction
   double width = 3.0;
   bool pocket = false;
-  Movements moves;
+  osm::LaneMovements moves;
 };
 struct Approach {
   int64_t road_id = -1;
@@ -320,8 +288,8 @@ class Builder {
       return std::clamp(w, o_.lane_width_min_m, o_.lane_width_max_m);
     };
     const std::string tl_key_f = xs.two_way ? "turn:lanes:forward" : "turn:lanes";
-    const auto tl_f = tags.count(tl_key_f) ? splitBar(tags.at(tl_key_f)) : std::vector<std::string>();
-    const auto tl_b = tags.count("turn:lanes:backward") ? splitBar(tags.at("turn:lanes:backward")) : std::vector<std::string>();
+    const auto tl_f = tags.count(tl_key_f) ? osm::splitTurnLanes(tags.at(tl_key_f)) : std::vector<std::string>();
+    const auto tl_b = tags.count("turn:lanes:backward") ? osm::splitTurnLanes(tags.at("turn:lanes:backward")) : std::vector<std::string>();
     for (int k = 0; k < 2; ++k) {
       Side& sd = xs.side[k];
       sd.sigma = k == 0 ? -1 : +1;
@@ -1086,7 +1054,7 @@ class Builder {
       std::vector<std::string> lr = sd.turn;
       if (!o_.right_hand_traffic) std::reverse(lr.begin(), lr.end());
       if (lr.size() == regular.size()) {
-        for (size_t j = 0; j < regular.size(); ++j) ap.lanes[regular[j]].moves = parseMovements(lr[j]);
+        for (size_t j = 0; j < regular.size(); ++j) ap.lanes[regular[j]].moves = osm::parseTurnLane(lr[j]);
       }
       for (auto& le : ap.lanes) {
         if (le.pocket) {

@@ -3,6 +3,7 @@
 #include "core/sim/world_builder.h"
 
 #include "core/config/yaml_reader.h"
+#include "core/osm/turn_lanes.h"
 
 #include <algorithm>
 #include <cmath>
@@ -19,11 +20,6 @@ int parseCount(const std::string& v) {
   const long n = std::strtol(v.c_str(), &end, 10);
   if (end == v.c_str() || n <= 0 || n > 12) return -1;
   return static_cast<int>(n);
-}
-
-int countEntries(const std::string& turn_lanes) {
-  if (turn_lanes.empty()) return -1;
-  return static_cast<int>(std::count(turn_lanes.begin(), turn_lanes.end(), '|')) + 1;
 }
 
 std::string tag(const osm::Tags& t, const std::string& k) {
@@ -154,7 +150,7 @@ LaneCounts laneCountsFor(const osm::Tags& tags, bool oneway) {
   if (oneway) {
     // All lanes go one way; lanes, else turn:lanes (its entries are the lanes), else the class.
     int n = lanes;
-    if (n < 0) n = countEntries(tag(tags, "turn:lanes"));
+    if (n < 0) n = osm::turnLaneCount(tag(tags, "turn:lanes"));
     // oneway=-1 roads may tag their lanes as backward.
     if (n < 0) n = std::max(fwd, bwd);
     if (n < 0) n = classDefaultPerDirection(highway, true);
@@ -162,8 +158,8 @@ LaneCounts laneCountsFor(const osm::Tags& tags, bool oneway) {
     c.backward = 0;
     return c;
   }
-  if (fwd < 0) fwd = countEntries(tag(tags, "turn:lanes:forward"));
-  if (bwd < 0) bwd = countEntries(tag(tags, "turn:lanes:backward"));
+  if (fwd < 0) fwd = osm::turnLaneCount(tag(tags, "turn:lanes:forward"));
+  if (bwd < 0) bwd = osm::turnLaneCount(tag(tags, "turn:lanes:backward"));
   if (lanes > 0) {
     if (fwd < 0 && bwd > 0) fwd = lanes - bwd;
     if (bwd < 0 && fwd > 0) bwd = lanes - fwd;

@@ -1,6 +1,8 @@
 // UDP receive helper for drivers (see udp_receiver.h).
 #include "core/lidar/udp_receiver.h"
 
+#include "core/geo/wall_clock.h"
+
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -9,17 +11,11 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <chrono>
 #include <cstring>
 
 namespace lanemap::lidar {
 namespace {
 
-int64_t wallUtime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 }  // namespace
 
@@ -97,7 +93,7 @@ bool UdpReceiver::receive(Datagram& out) {
       out.receive_utime = static_cast<int64_t>(tv.tv_sec) * 1000000 + tv.tv_usec;
     }
   }
-  if (out.receive_utime == 0) out.receive_utime = wallUtime();
+  if (out.receive_utime == 0) out.receive_utime = geo::wallUtime();
   return true;
 }
 

@@ -99,7 +99,7 @@ void CameraApp::publish(const camera::CapturedFrame& frame) {
   msg.size = static_cast<int32_t>(frame.jpeg.size());
   msg.data = frame.jpeg;
   process_.lcm().publish(settings_.channel, &msg);
-  process_.latency().add(static_cast<double>(nowUtime() - frame.utime) * 1e-3);
+  process_.latency().add(static_cast<double>(geo::wallUtime() - frame.utime) * 1e-3);
   updateCounters();
 }
 

@@ -144,7 +144,7 @@ void LidarApp::publish(const PacketSweep& sweep) {
   for (const auto& p : sweep.packets) msg.data.emplace_back(p.begin(), p.end());
   process_.lcm().publish(settings_.packets_channel, &msg);
   process_.counters().add("sweeps_published");
-  process_.latency().add(static_cast<double>(nowUtime() - sweep.packet_utime.back()) * 1e-3);
+  process_.latency().add(static_cast<double>(geo::wallUtime() - sweep.packet_utime.back()) * 1e-3);
 
   if (!settings_.publish_points || sweep.points.empty()) return;
   lidar_points_t pts;

@@ -1,6 +1,7 @@
 // Live UDP reception and capture replay for the LIDAR driver (see packet_source.h).
 #include "drivers/lidar_vlp16/packet_source.h"
 
+#include "core/geo/wall_clock.h"
 #include "core/lidar/pcap.h"
 #include "core/lidar/velodyne.h"
 
@@ -13,11 +14,6 @@
 namespace lanemap::drivers {
 namespace {
 
-int64_t wallUtime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 // Sleeps until `capture_us` (relative to the first record) is due at the rate scale.
 class Pacer {
@@ -86,7 +82,7 @@ ReplayStats replayCapture(const std::string& path, const ReplayOptions& options,
     pacer.wait(capture_us, stop);
     d.size = d.data.size();
     d.truncated = false;
-    d.receive_utime = options.keep_capture_time ? capture_us : wallUtime();
+    d.receive_utime = options.keep_capture_time ? capture_us : geo::wallUtime();
     sink(d, kind);
     ++stats.datagrams;
   };

@@ -1,24 +1,20 @@
 // Serial, UDP and file sources of NMEA bytes (see nmea_source.h).
 #include "drivers/pose_nmea/nmea_source.h"
 
+#include "core/geo/wall_clock.h"
+
 #include <fcntl.h>
 #include <poll.h>
 #include <termios.h>
 #include <unistd.h>
 
 #include <cerrno>
-#include <chrono>
 #include <cstring>
 #include <map>
 
 namespace lanemap::drivers {
 namespace {
 
-int64_t wallUtime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 }  // namespace
 
@@ -76,7 +72,7 @@ bool SerialSource::read(std::string& chunk, int64_t& receive_utime, int timeout_
   }
   char buf[4096];
   const ssize_t n = ::read(fd_, buf, sizeof(buf));
-  receive_utime = wallUtime();
+  receive_utime = geo::wallUtime();
   if (n > 0) {
     chunk.append(buf, static_cast<std::size_t>(n));
   } else if (n < 0 && errno != EAGAIN && errno != EINTR) {
@@ -112,7 +108,7 @@ bool FileSource::read(std::string& chunk, int64_t& receive_utime, int) {
   if (!std::getline(in_, line)) return false;
   chunk += line;
   chunk.push_back('\n');
-  receive_utime = wallUtime();
+  receive_utime = geo::wallUtime();
   return true;
 }
 

@@ -95,7 +95,7 @@ PoseApp::~PoseApp() {
 
 void PoseApp::run() {
   std::string chunk, line;
-  int64_t receive_utime = nowUtime();
+  int64_t receive_utime = geo::wallUtime();
   try {
     while (!stop_.load() && !Process::stopRequested()) {
       chunk.clear();
@@ -160,7 +160,7 @@ void PoseApp::publish(const gnss::GnssPose& p) {
   msg.status = static_cast<int8_t>(p.status);
   process_.lcm().publish(settings_.channel, &msg);
   process_.counters().add("poses_published");
-  process_.latency().add(static_cast<double>(nowUtime() - p.utime) * 1e-3);
+  process_.latency().add(static_cast<double>(geo::wallUtime() - p.utime) * 1e-3);
 }
 
 void PoseApp::updateCounters() {

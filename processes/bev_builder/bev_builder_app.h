@@ -168,7 +168,7 @@ class BevBuilderApp {
     }
     const auto it = received_.find(frame_utime);
     if (it == received_.end()) return;
-    process_.latency().add(static_cast<double>(nowUtime() - it->second) * 1e-3);
+    process_.latency().add(static_cast<double>(geo::wallUtime() - it->second) * 1e-3);
     received_.erase(received_.begin(), std::next(it));
   }
 
@@ -265,7 +265,7 @@ class BevBuilderApp {
       return;
     }
     if (!drawn) return;
-    msg.utime = nowUtime();
+    msg.utime = geo::wallUtime();
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - now).count();
     process_.lcm().publish(channels::kBevOpen, &msg);
     process_.counters().add("previews_published");

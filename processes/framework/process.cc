@@ -1,5 +1,6 @@
 #include "processes/framework/process.h"
 
+#include "core/geo/wall_clock.h"
 #include "lanemap/status_t.hpp"
 #include "processes/framework/channels.h"
 #include "processes/framework/log_reader.h"
@@ -38,11 +39,6 @@ std::string hostName() {
 
 }  // namespace
 
-int64_t nowUtime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 void Counters::add(const std::string& name, int64_t n) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -173,7 +169,7 @@ void Process::setState(const std::string& state) {
 
 void Process::publishStatus() {
   status_t msg;
-  msg.utime = nowUtime();
+  msg.utime = geo::wallUtime();
   msg.process = name_;
   msg.host = hostName();
   msg.pid = static_cast<int32_t>(getpid());

@@ -10,6 +10,7 @@
 //   }
 #pragma once
 
+#include "core/geo/wall_clock.h"
 #include "core/config/yaml_reader.h"
 
 #include <CLI/CLI.hpp>
@@ -129,8 +130,5 @@ class Process {
   int64_t replay_utime_ = 0, replay_events_ = 0;
   std::function<bool()> idle_;
 };
-
-// Microseconds since the epoch, the utime of every lanemap message.
-int64_t nowUtime();
 
 }  // namespace lanemap

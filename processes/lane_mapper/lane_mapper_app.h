@@ -149,7 +149,7 @@ class LaneMapperApp {
       }
       try {
         mapRoad(job.road);
-        process_.latency().add(static_cast<double>(nowUtime() - job.recv_utime) * 1e-3);
+        process_.latency().add(static_cast<double>(geo::wallUtime() - job.recv_utime) * 1e-3);
       } catch (const std::exception& e) {
         process_.counters().add("roads_failed");
         std::cerr << "lane_mapper: road " << job.road.road_id << ": " << e.what() << "\n";
@@ -232,8 +232,8 @@ class LaneMapperApp {
       Job job;
       job.road.road_id = id;
       job.road.path = bev::roadGridPath(store_, id);
-      job.road.utime = nowUtime();
-      job.recv_utime = nowUtime();
+      job.road.utime = geo::wallUtime();
+      job.recv_utime = geo::wallUtime();
       jobs_.push_back(job);
       process_.counters().add("roads_mapped_again");
     }
@@ -299,7 +299,7 @@ class LaneMapperApp {
       }
     }
     assembler_->update();
-    for (const auto& [id, m] : assembler_->roads()) publish(id, m, nowUtime());
+    for (const auto& [id, m] : assembler_->roads()) publish(id, m, geo::wallUtime());
   }
 
   // A road whose BEV grid is in the store but whose lanes are missing or older (its BEV_ROAD came
@@ -312,8 +312,8 @@ class LaneMapperApp {
       Job job;
       job.road.road_id = id;
       job.road.path = path;
-      job.road.utime = nowUtime();
-      job.recv_utime = nowUtime();
+      job.road.utime = geo::wallUtime();
+      job.recv_utime = geo::wallUtime();
       jobs_.push_back(job);
       process_.counters().add("roads_caught_up");
       std::cerr << "lane_mapper: road " << id << " has a BEV grid but no lanes newer than it: mapping it now\n";
@@ -325,8 +325,8 @@ class LaneMapperApp {
       Job job;
       job.road.road_id = id;
       job.road.path = p.path;
-      job.road.utime = nowUtime();
-      job.recv_utime = nowUtime();
+      job.road.utime = geo::wallUtime();
+      job.recv_utime = geo::wallUtime();
       jobs_.push_back(job);
       process_.counters().add("roads_caught_up");
       std::cerr << "lane_mapper: partial road " << id << " has no lanes newer than its BEV grid: mapping it now\n";

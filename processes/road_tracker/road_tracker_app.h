@@ -48,7 +48,7 @@ class RoadTrackerApp {
     counters.set("filter_resets", stats.filter_resets);
     counters.set("rematches", stats.rematches);
     counters.set("current_road", tracker_.currentRoad());
-    process_.latency().add(static_cast<double>(lanemap::nowUtime() - rbuf->recv_utime) * 1e-3);
+    process_.latency().add(static_cast<double>(lanemap::geo::wallUtime() - rbuf->recv_utime) * 1e-3);
   }
 
   void publish(const lanemap::tracking::RoadEvent& e) {

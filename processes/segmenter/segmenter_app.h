@@ -135,7 +135,7 @@ class SegmenterApp {
       out.size = static_cast<int32_t>(out.data.size());
       out.source = model_->name();
       process_.lcm().publish(s_.output_channel, &out);
-      const int64_t published_utime = nowUtime();
+      const int64_t published_utime = geo::wallUtime();
       c.add("labels_published");
       const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       ms_sum += ms;
@@ -168,7 +168,7 @@ class OracleApp {
   void onTruth(const lcm::ReceiveBuffer* rbuf, const std::string&, const label_image_t* msg) {
     process_.counters().add("truth_received");
     process_.lcm().publish(s_.output_channel, msg);
-    process_.latency().add(static_cast<double>(nowUtime() - rbuf->recv_utime) * 1e-3);
+    process_.latency().add(static_cast<double>(geo::wallUtime() - rbuf->recv_utime) * 1e-3);
     process_.counters().add("labels_published");
   }
   Process& process_;

@@ -127,7 +127,7 @@ class LiveFeed {
     try {
       state_.setRoadLanes(msg->id, fromMessage(*msg, state_.skeleton()));
       process_.counters().set("roads_shown", static_cast<int64_t>(state_.mappedRoadCount()));
-      process_.latency().add(static_cast<double>(nowUtime() - rbuf->recv_utime) * 1e-3);
+      process_.latency().add(static_cast<double>(geo::wallUtime() - rbuf->recv_utime) * 1e-3);
     } catch (const std::exception& e) {
       process_.counters().add("lane_maps_failed");
       std::cerr << "viewer: LANE_MAP of road " << msg->id << ": " << e.what() << "\n";

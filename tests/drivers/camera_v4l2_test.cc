@@ -649,7 +649,7 @@ TEST(V4l2Device, RealCameraStreamsFramesOfTheNegotiatedSize) {
   }
   if (used.empty()) GTEST_SKIP() << "no /dev/video* is a capture device";
   ASSERT_EQ(frames.size(), 10u) << used;
-  const int64_t now = lanemap::nowUtime();
+  const int64_t now = lanemap::geo::wallUtime();
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const cv::Mat img = cv::imdecode(frames[i].jpeg, cv::IMREAD_COLOR);
     ASSERT_FALSE(img.empty()) << used << " frame " << i;

@@ -1,8 +1,10 @@
 #include "processes/framework/message_json.h"
 
 #include "core/bev/bev_grid.h"
+#include "core/seg/segmenter.h"
 #include "lanemap/bev_preview_t.hpp"
 #include "lanemap/bev_road_t.hpp"
+#include "lanemap/label_image_t.hpp"
 #include "lanemap/lane_map_t.hpp"
 #include "lanemap/road_event_t.hpp"
 #include "processes/framework/channels.h"
@@ -84,6 +86,24 @@ nlohmann::json messageJson(const std::string& channel, const void* data, int siz
             {"origin_longitude", m.origin_longitude}, {"origin_altitude", m.origin_altitude}, {"lanes", lanes},
             {"map_path", fileName(m.map_path)}, {"partial_station_m", m.partial_station_m},
             {"partial_road_length_m", m.partial_road_length_m}};
+  }
+  if (type == "lanemap.label_image_t") {
+    // The labels as pixels per class (a model's argmax may differ in a few pixels between CPUs; a
+    // hash of the PNG would not say by how much).
+    const auto m = decode<label_image_t>(channel, data, size);
+    nlohmann::json classes = nlohmann::json::array();
+    try {
+      const cv::Mat labels = seg::decodeLabels(m.encoding, m.width, m.height, m.data);
+      std::vector<int64_t> n(label_image_t::NUM_CLASSES + 1, 0);  // the last: ids beyond the classes
+      for (int r = 0; r < labels.rows; ++r) {
+        for (int c = 0; c < labels.cols; ++c) ++n[std::min<int>(labels.at<uint8_t>(r, c), label_image_t::NUM_CLASSES)];
+      }
+      classes = n;
+    } catch (const std::exception& e) {
+      classes = std::string("undecodable: ") + e.what();
+    }
+    return {{"utime", m.utime}, {"seq", m.seq}, {"width", m.width}, {"height", m.height}, {"encoding", m.encoding},
+            {"source", m.source}, {"class_pixels", classes}};
   }
   if (type == "lanemap.bev_preview_t") {
     const auto m = decode<bev_preview_t>(channel, data, size);

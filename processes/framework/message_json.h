@@ -1,8 +1,9 @@
 // lanemap's LCM messages as JSON, for the process replay references (tests/replay): what a process
 // published, one object per message, in a form a reviewer can read in a diff. Decodes the outputs
-// of the processes (ROAD_EVENT, BEV_ROAD, LANE_MAP, BEV_OPEN) by the channel registry's type; a
-// file path in a message (the store is a temporary folder in a replay) is reduced to its name; a
-// BEV_ROAD's grid file, when it is there, is summed per layer ("grid": what the builder stored).
+// of the processes (ROAD_EVENT, BEV_ROAD, LANE_MAP, BEV_OPEN, SEMANTIC_FRONT: its pixels per
+// class) by the channel registry's type; a file path in a message (the store is a temporary folder
+// in a replay) is reduced to its name; a BEV_ROAD's grid file, when it is there, is summed per
+// layer ("grid": what the builder stored).
 // Other channels: their size and an FNV-1a hash of their bytes.
 #pragma once
 

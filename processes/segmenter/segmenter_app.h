@@ -69,6 +69,9 @@ class SegmenterApp {
                           "frames_segmented", "labels_published"})
       process_.counters().set(c, 0);
     worker_ = std::thread([this] { run(); });
+    // Process replay: the next frame goes in once this one is labelled (or skipped), so none is
+    // dropped and the output does not depend on the machine's speed.
+    process_.setIdleCheck([this] { return finished_.load() == received_.load(); });
   }
   ~SegmenterApp() {
     stop_ = true;
@@ -80,7 +83,9 @@ class SegmenterApp {
   void onImage(const lcm::ReceiveBuffer* rbuf, const std::string&, const image_t* msg) {
     auto& c = process_.counters();
     c.add("frames_received");
+    ++received_;
     const size_t dropped = queue_.push(ReceivedFrame{*msg, rbuf->recv_utime});
+    finished_ += static_cast<int64_t>(dropped);
     if (dropped) c.add("frames_dropped", static_cast<int64_t>(dropped));
     c.set("queue_max_depth", static_cast<int64_t>(queue_.maxDepth()));
   }
@@ -92,6 +97,10 @@ class SegmenterApp {
     while (!stop_) {
       std::optional<ReceivedFrame> frame = queue_.pop(std::chrono::milliseconds(100));
       if (!frame) continue;
+      struct Finished {  // however the frame's turn ends (published, skipped, failed)
+        std::atomic<int64_t>& n;
+        ~Finished() { ++n; }
+      } finished{finished_};
       const image_t* msg = &frame->msg;
       const auto t0 = std::chrono::steady_clock::now();
       cv::Mat bgr;
@@ -151,6 +160,7 @@ class SegmenterApp {
   std::unique_ptr<seg::Segmenter> model_;
   segmenter::DropOldestQueue<ReceivedFrame> queue_;
   std::atomic<bool> stop_{false};
+  std::atomic<int64_t> received_{0}, finished_{0};  // frames in; frames labelled, skipped or dropped
   int warnings_ = 0;
   std::thread worker_;
 };

@@ -1,7 +1,7 @@
 // Process replay (issue 19, openpilot's manner): every case of tests/replay/cases.yaml (the road
-// tracker, the BEV builder, the lane mapper, each over its recorded input) publishes what its
-// reference says; a reference changed by more than the tolerance fails, naming the message and the
-// field; the comparison itself (processes/framework/message_json.h) tells a number within the
+// tracker, the BEV builder, the lane mapper, the segmenter on the shipped model, each over its
+// recorded input) publishes what its reference says; a reference changed by more than the
+// tolerance fails, naming the message and the field, and passes within a case's own tolerance; the comparison itself (processes/framework/message_json.h) tells a number within the
 // tolerance from one beyond it, a missing field, a new one and a missing message.
 #include "processes/framework/message_json.h"
 #include "tests/common/read_file.h"
@@ -37,7 +37,8 @@ TEST(ProcessReplay, EveryProcessPublishesWhatItsReferenceSays) {
   const ReplayRun r = run("");
   EXPECT_EQ(r.rc, 0) << r.out;
   for (const char* line : {"road_tracker: 3 messages, as the reference", "bev_builder: 2 messages, as the reference",
-                           "lane_mapper: 2 messages, as the reference", "3 case(s) run, 0 differ"}) {
+                           "lane_mapper: 2 messages, as the reference", "segmenter: 7 messages, as the reference",
+                           "4 case(s) run, 0 differ"}) {
     EXPECT_NE(r.out.find(line), std::string::npos) << line << "\n" << r.out;
   }
 }
@@ -65,6 +66,11 @@ TEST(ProcessReplay, AReferenceChangedBeyondTheToleranceFailsNamingTheField) {
   EXPECT_EQ(u.rc, 0) << u.out;
   EXPECT_EQ(readFile(tmp.str("road_tracker.reference.jsonl")), ref);
   EXPECT_EQ(run("--cases " + tmp.str("cases.yaml")).rc, 0);
+  // A case's own tolerance (abs_tolerance: 0.01 m) lets the 1 mm through.
+  std::ofstream(tmp.str("road_tracker.reference.jsonl")) << first.dump() << "\n" << ref.substr(eol + 1);
+  std::ofstream(tmp.str("cases.yaml"), std::ios::app) << "    abs_tolerance: 0.01\n";
+  const ReplayRun loose = run("--cases " + tmp.str("cases.yaml"));
+  EXPECT_EQ(loose.rc, 0) << loose.out;
 }
 
 TEST(MessageJson, NumbersWithinTheToleranceAgreeEverythingElseExactly) {

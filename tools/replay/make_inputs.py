@@ -6,6 +6,7 @@ are then kept in the repository, as a recording would be).
   tools/replay/make_inputs.py D build/bin tests/replay
 
 road_tracker.input.lcmlog: the drive's POSE, every 4th (25 Hz).
+segmenter.input.lcmlog:    every 15th CAMERA_FRONT frame (JPEG, 640x360): 7 frames.
 bev_builder.input.lcmlog:  those poses, SEMANTIC_FRONT_TRUTH (5 Hz) and the ROAD_EVENTs the road
                            tracker publishes on them (its replay), in time order.
 roads.osm:                 the drive's road-level OSM.
@@ -55,6 +56,8 @@ def main():
     os.makedirs(out, exist_ok=True)
     shutil.copyfile(os.path.join(drive, "roads.osm"), os.path.join(out, "roads.osm"))
     write_log(os.path.join(out, "road_tracker.input.lcmlog"), poses)
+    frames = [e for e in events if e[1] == "CAMERA_FRONT"][::15]
+    write_log(os.path.join(out, "segmenter.input.lcmlog"), frames)
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     with tempfile.TemporaryDirectory() as tmp:
         rt_out = os.path.join(tmp, "rt.lcmlog")
@@ -65,7 +68,7 @@ def main():
     # The road tracker answers a pose: its events go right after that pose (a stable sort keeps it).
     merged = sorted(poses + road_events + labels, key=lambda e: (e[0], {"POSE": 0, "ROAD_EVENT": 1}.get(e[1], 2)))
     write_log(os.path.join(out, "bev_builder.input.lcmlog"), merged)
-    print(f"{len(poses)} poses, {len(labels)} label frames, {len(road_events)} road events -> {out}")
+    print(f"{len(poses)} poses, {len(labels)} label frames, {len(road_events)} road events, {len(frames)} camera frames -> {out}")
 
 
 if __name__ == "__main__":

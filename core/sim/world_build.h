@@ -366,6 +366,27 @@ class Builder {
     }
   }
 
+  // False as soon as `blocks(i)` holds for an item i indexed in `grid` (a cell map of forCells) over
+  // the cells of the rectangle's bounding box; true when none does.
+  template <typename F>
+  bool noneBlocks(const std::unordered_map<int64_t, std::vector<uint32_t>>& grid, const geom::Rect& r, F blocks) const {
+    Eigen::AlignedBox2d box;
+    for (const auto& c : r.corners()) box.extend(c);
+    bool clear = true;
+    forCells(box.min(), box.max(), [&](int64_t key) {
+      if (!clear) return;
+      auto it = grid.find(key);
+      if (it == grid.end()) return;
+      for (uint32_t idx : it->second) {
+        if (blocks(idx)) {
+          clear = false;
+          return;
+        }
+      }
+    });
+    return clear;
+  }
+
   // True when the rectangle keeps clear of every road (but `skip_xs`) and intersection.
   bool clearOfRoads(const geom::Rect& r, int64_t skip_xs, double margin) const;
   bool clearOfBuildings(const geom::Rect& r) const;

@@ -26,59 +26,25 @@ void Builder::indexZones() {
 }
 
 bool Builder::clearOfRoads(const geom::Rect& r, int64_t skip_xs, double margin) const {
-  Eigen::AlignedBox2d box;
-  for (const auto& c : r.corners()) box.extend(c);
-  bool clear = true;
-  forCells(box.min(), box.max(), [&](int64_t key) {
-    if (!clear) return;
-    auto it = zone_grid_.find(key);
-    if (it == zone_grid_.end()) return;
-    for (uint32_t idx : it->second) {
-      const ZoneSeg& z = zones_[idx];
-      if (z.xs == skip_xs) continue;
-      const double side = geom::cross(z.b - z.a, r.c - z.a);
-      const double need = (side > 0 ? z.left : z.right) + margin;
-      if (geom::rectSegmentDistance(r, z.a, z.b) < need) {
-        clear = false;
-        return;
-      }
-    }
+  const bool clear_of_roads = noneBlocks(zone_grid_, r, [&](uint32_t idx) {
+    const ZoneSeg& z = zones_[idx];
+    if (z.xs == skip_xs) return false;
+    const double side = geom::cross(z.b - z.a, r.c - z.a);
+    const double need = (side > 0 ? z.left : z.right) + margin;
+    return geom::rectSegmentDistance(r, z.a, z.b) < need;
   });
-  if (!clear) return false;
+  if (!clear_of_roads) return false;
   const auto k = r.corners();
-  forCells(box.min(), box.max(), [&](int64_t key) {
-    if (!clear) return;
-    auto it = circle_grid_.find(key);
-    if (it == circle_grid_.end()) return;
-    for (uint32_t idx : it->second) {
-      const Circle& c = zones_circles_[idx];
-      double d = r.contains(c.c) ? 0.0 : 1e300;
-      for (int i = 0; i < 4; ++i) d = std::min(d, geom::pointSegmentDistance(c.c, k[i], k[(i + 1) % 4]));
-      if (d < c.r + margin) {
-        clear = false;
-        return;
-      }
-    }
+  return noneBlocks(circle_grid_, r, [&](uint32_t idx) {
+    const Circle& c = zones_circles_[idx];
+    double d = r.contains(c.c) ? 0.0 : 1e300;
+    for (int i = 0; i < 4; ++i) d = std::min(d, geom::pointSegmentDistance(c.c, k[i], k[(i + 1) % 4]));
+    return d < c.r + margin;
   });
-  return clear;
 }
 
 bool Builder::clearOfBuildings(const geom::Rect& r) const {
-  Eigen::AlignedBox2d box;
-  for (const auto& c : r.corners()) box.extend(c);
-  bool clear = true;
-  forCells(box.min(), box.max(), [&](int64_t key) {
-    if (!clear) return;
-    auto it = building_grid_.find(key);
-    if (it == building_grid_.end()) return;
-    for (uint32_t idx : it->second) {
-      if (geom::rectsOverlap(building_rects_[idx], r)) {
-        clear = false;
-        return;
-      }
-    }
-  });
-  return clear;
+  return noneBlocks(building_grid_, r, [&](uint32_t idx) { return geom::rectsOverlap(building_rects_[idx], r); });
 }
 
 void Builder::addBuildingRect(const geom::Rect& r) {

@@ -5,12 +5,12 @@
 // running (no restart), says in STATUS what it lost (the relay: dropped per channel; the BEV
 // builder: frames_missed from the frames' seq, frames_missed_pct) and maps the driven road, and
 // the relay drops exactly what its log mode drops of the same log (so the run can be replayed
-// offline). The lanes' precision and recall against the truth are printed; the issue's "within
-// 0.05 of the lossless run at 10 %" is not met by this drive's seed 7 (see the end of the test).
+// offline). The lanes' precision and recall against the truth are printed, and at 10 % they are
+// within 0.05 of the lossless run's (the issue's criterion, per run).
 // Everything runs in a private network namespace; ~85 s (three 18 s drives at real time).
 //
 // The second test replays the loss deterministically (log mode + lanemap-offline) for ten loss
-// seeds: 9 of 10 give the lossless lanes; why seed 7 does not is in docs/robustness.md.
+// seeds: each gives lanes within 0.05 of the lossless run's P and R (the issue's criterion, per run).
 #include "core/eval/area.h"
 #include "core/eval/evaluate.h"
 #include "core/io/lanelet2.h"
@@ -25,6 +25,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -194,23 +195,18 @@ TEST(LossyBus, TenAndThirtyPercentLostAreCountedAndTheDrivenRoadIsStillMapped) {
   const auto& lossless = runs[0].report;
   ASSERT_GT(lossless.lane_recall.total, 0u);
   EXPECT_EQ(lossless.lane_recall.value(), 1.0) << "the lossless run finds every lane of the driven road";
-  // Measured on this drive (2 true lanes): lossless P 0.667 R 1; 10 % on every channel P 0.333
-  // R 0.5; 30 % P 0.667 R 1. The offline replay of the same drops (lanemap-fault-relay --log-in,
-  // lanemap-offline) gives the same figures, so the cause is in what is lost, not in the live
-  // graph's timing. It is not the graph's handling of the loss either: no frame is skipped
-  // (every kept frame is projected), the road opens at the same pose and closes 10 ms later, and
-  // with no LIDAR sweep lost the lanes are the same. Seed 7 drops 6 of the 15 frames of 6.0-8.8 s, the frames that
-  // see the lane's 3.5 m sideways shift and the new lane beside it (s 90-125 m of the road), so
-  // the BEV there rests on fewer frames; with those frames
-  // lost, the lane explorer's chain through the shift breaks on small pose differences: seed 7's
-  // POSE drops break it (the poses of frames and LIDAR packets interpolated across a 20 ms gap,
-  // the white noise of a sample apart), the POSE drops of seeds 1-6 do not, and neither lost
-  // alone does. The 120 m lane, which the lossless run finds by its RMS alone
-  // (IoU 0.59, RMS 0.12 m), then misses both IoU 0.7 and RMS 0.2 m. 9 of 10 loss seeds give
-  // the lossless lanes (the test below).
-  // The issue's "within 0.05 of the lossless run" at 10 % is NOT met by this seed
-  // (docs/robustness.md): what is held here is that each lossy run maps the driven road and finds
-  // at least one of its lanes.
+  // The issue's criterion at 10 % on every channel, per run: P and R within 0.05 of the lossless
+  // run's. Measured 2026-12-05 on this drive (2 true lanes, relay seed 7), twice alike: lossless
+  // P 1 R 1, 10 % P 1 R 1, 30 % P 0.5 R 0.5. Until 2026-12-04 seed 7 took the 120 m lane with it at
+  // 10 % (P 0.333 R 0.5: the lane explorer's chain through the lane's 3.5 m shift broke on the
+  // frames and poses that seed drops; docs/robustness.md); the mapping changes of that day keep it.
+  // The offline replay of the same drops (lanemap-fault-relay --log-in, lanemap-offline: the test
+  // below) agrees. At 30 % what is held is that the graph maps the driven road and finds a lane.
+  ASSERT_EQ(runs.size(), 3u);
+  const Run& ten = runs[1];
+  ASSERT_DOUBLE_EQ(ten.drop, 0.1);
+  EXPECT_NEAR(ten.report.lane_precision.value(), lossless.lane_precision.value(), 0.05) << "10 % lost";
+  EXPECT_NEAR(ten.report.lane_recall.value(), lossless.lane_recall.value(), 0.05) << "10 % lost";
   for (const Run& r : runs) {
     EXPECT_GE(r.report.lane_recall.value(), 0.5) << "drop " << r.drop;
     EXPECT_GT(r.report.lane_precision.hits, 0u) << "drop " << r.drop;
@@ -233,7 +229,7 @@ lanemap::eval::EvalReport mapOffline(const std::string& drive, const std::string
 
 // The loss replayed deterministically (the relay's log mode, then lanemap-offline) for ten loss
 // seeds: what 10 % on every channel costs on this drive, not what one seed happens to cost.
-TEST(LossyBus, TenPercentLostOverTenLossSeedsGivesTheLosslessLanesButOnce) {
+TEST(LossyBus, TenPercentLostOverTenLossSeedsGivesTheLosslessLanes) {
   const std::string drive = lt::sharedSimDrive("osm/west-oakland.osm", lt::kBevDriveSeconds, lt::kBevDriveSeed, lt::kBevDriveArgs);
   ASSERT_FALSE(drive.empty());
   const auto [origin, driven] = drivenTruth(drive);
@@ -256,18 +252,22 @@ TEST(LossyBus, TenPercentLostOverTenLossSeedsGivesTheLosslessLanesButOnce) {
     built += r.lane_precision.total;
     r_hits += r.lane_recall.hits;
     truth_lanes += r.lane_recall.total;
-    same += r.lane_precision.value() == lossless.lane_precision.value() && r.lane_recall.value() == lossless.lane_recall.value();
+    same += std::abs(r.lane_precision.value() - lossless.lane_precision.value()) <= 0.05 &&
+            std::abs(r.lane_recall.value() - lossless.lane_recall.value()) <= 0.05;
     // Whatever a seed costs, the road is mapped and one lane of it at least found.
     EXPECT_GE(r.lane_recall.value(), 0.5) << "loss seed " << seed;
   }
-  std::printf("10 %% lost, pooled over 10 loss seeds: lanes P %.3f R %.3f (lossless P %.3f R %.3f); %zu of 10 seeds give the lossless P and R\n",
+  std::printf("10 %% lost, pooled over 10 loss seeds: lanes P %.3f R %.3f (lossless P %.3f R %.3f); %zu of 10 seeds within 0.05 of them\n",
               built ? static_cast<double>(p_hits) / built : 0.0, static_cast<double>(r_hits) / truth_lanes,
               lossless.lane_precision.value(), lossless.lane_recall.value(), same);
-  // Measured: 9 of 10 seeds give the lossless lanes (P 0.667 R 1); seed 7 (the live test's) loses
-  // the 120 m lane to the explorer at the lane's 3.5 m shift (docs/robustness.md): pooled P 0.633
-  // R 0.950. A graph that handled a lost pose or frame worse (skipped the frame, closed the road
-  // early or late) costs more seeds.
-  EXPECT_GE(same, 9u);
+  // The issue's criterion, per run: every loss seed's P and R within 0.05 of the lossless run's.
+  // Measured 2026-12-05: all 10 give the lossless lanes (P 0.667 R 1). Before the mapping changes of
+  // 2026-12-04 (lanes on nothing dropped, lanes carried through short roads, centre lines recentred
+  // between their bounds; which of them did it was not isolated) seed 7, the live test's, lost the
+  // 120 m lane to the explorer at the lane's 3.5 m shift (docs/robustness.md): 9 of 10 then. A graph
+  // that handled a lost pose or frame worse (skipped the frame, closed the road early or late)
+  // costs seeds.
+  EXPECT_EQ(same, 10u);
 }
 
 }  // namespace

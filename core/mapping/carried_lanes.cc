@@ -17,7 +17,6 @@ double angleBetween(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return std::abs(std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b)));
 }
 
-
 // The lanes of the mapped road beside `road` at one of its ends (kBefore: ending at its start,
 // kAfter: starting at its end) that runs on straight from or into it.
 enum class Side { kBefore, kAfter };

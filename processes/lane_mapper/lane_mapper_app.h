@@ -214,24 +214,27 @@ class LaneMapperApp {
     process_.counters().add("lanes_found", static_cast<int64_t>(res.lanes.size()));
     if (export_interval_ == Clock::duration::zero()) exportWholeMap();  // before LANE_MAP: its map_path holds the road
     publish(job.road_id, m, job.utime);
-    awaitLanes(*road, !res.lanes.empty(), partial.has_value());
+    awaitLanes(*road, job.path, !res.lanes.empty(), partial.has_value());
   }
 
   // A short road mapped with no lane (nothing explored, no mapped road beside it to carry from)
-  // waits; when a road meeting it gets lanes it is mapped again (core/mapping/carried_lanes.h).
-  void awaitLanes(const skeleton::AtomicRoad& road, bool has_lanes, bool partial) {
+  // waits with its grid's path; when a road meeting it gets lanes it is mapped again from that
+  // grid (core/mapping/carried_lanes.h).
+  void awaitLanes(const skeleton::AtomicRoad& road, const std::string& grid, bool has_lanes, bool partial) {
     if (!has_lanes) {
-      if (!partial && mapping::isShortRoad(road, options_)) awaiting_.insert(road.id);
+      if (!partial && mapping::isShortRoad(road, options_)) awaiting_[road.id] = grid;
       return;
     }
     awaiting_.erase(road.id);
-    const auto again = mapping::roadsAwaitingLanesFrom(*sk_, road.id, awaiting_);
+    std::set<int64_t> ids;
+    for (const auto& [id, path] : awaiting_) ids.insert(id);
+    const auto again = mapping::roadsAwaitingLanesFrom(*sk_, road.id, ids);
     if (again.empty()) return;
     std::lock_guard<std::mutex> lock(mutex_);
     for (int64_t id : again) {
       Job job;
       job.road.road_id = id;
-      job.road.path = bev::roadGridPath(store_, id);
+      job.road.path = awaiting_.at(id);
       job.road.utime = geo::wallUtime();
       job.recv_utime = geo::wallUtime();
       jobs_.push_back(job);
@@ -289,7 +292,7 @@ class LaneMapperApp {
         auto lanes = io::readLanelet2(path, o.lat, o.lon, ro);
         const skeleton::AtomicRoad* road = sk_->road(id);
         if (road && lanes.lanelets.empty() && mapping::isShortRoad(*road, options_) && fs::exists(bev::roadGridPath(store_, id), ec)) {
-          awaiting_.insert(id);  // mapped with no lane before the restart: still waits for a road beside it
+          awaiting_[id] = bev::roadGridPath(store_, id);  // mapped with no lane before the restart: still waits
         }
         assembler_->setRoad(id, std::move(lanes));
         process_.counters().add("roads_loaded");
@@ -352,7 +355,7 @@ class LaneMapperApp {
   };
   std::deque<Job> jobs_;
   double map_road_ms_max_ = 0.0;  // worker thread only
-  std::set<int64_t> awaiting_;    // short roads mapped with no lane (awaitLanes; worker thread, and the constructor)
+  std::map<int64_t, std::string> awaiting_;  // short roads mapped with no lane -> their grid (awaitLanes; worker thread, and the constructor)
   double export_ms_max_ = 0.0;    // worker thread, then the destructor
   bool stop_ = false;
   bool busy_ = false;  // the worker is mapping a job or exporting (under mutex_)

@@ -363,10 +363,11 @@ TEST(LaneMapperProcess, AShortRoadMappedWithNoLaneTakesTheLanesOfTheRoadAfterOnc
     yaml.replace(at, key.size(), "carry_lanes_max_m: 100000 ");
     std::ofstream(config) << yaml;
   }
-  // The grids where the BEV builder stores them (the mapper reads the link's there again), each
-  // written just before its BEV_ROAD (written before the start, the mapper would catch them up):
-  // the link's observed ground with nothing drivable, the road after's two lanes a direction.
-  const std::string link_grid = bev::roadGridPath(store, link->id);
+  // The grids, each written just before its BEV_ROAD (written into the store before the start,
+  // the mapper would catch them up): the link's observed ground with nothing drivable, outside the
+  // store (the mapper maps it again from the path its BEV_ROAD named), the road after's two lanes a
+  // direction where the BEV builder stores it.
+  const std::string link_grid = tmp.str("link.bev");
   bev::BevGrid empty;
   {
     const Eigen::Vector2d a = link->polyline.front(), b = link->polyline.back();
@@ -393,12 +394,12 @@ TEST(LaneMapperProcess, AShortRoadMappedWithNoLaneTakesTheLanesOfTheRoadAfterOnc
     lanemap::testing::ChildProcess proc({kBinary, "--config", config, "--osm", kOsm, "--store", store, "--lcm-url", url});
     ASSERT_TRUE(proc.started());
     ASSERT_TRUE(waitFor(lcm, [&] { return !c.status.empty(); }, 20)) << "no STATUS from lanemap-lane-mapper";
-    fs::create_directories(fs::path(link_grid).parent_path());
     empty.save(link_grid);
     const bev_road_t first = bevRoad(*link, link_grid);
     lcm.publish("BEV_ROAD", &first);
     ASSERT_TRUE(waitFor(lcm, [&] { return mapsOf(link->id).size() == 1; }, 30)) << "no LANE_MAP of the link";
     EXPECT_EQ(mapsOf(link->id)[0].num_lanes, 0) << "nothing drivable, nothing to carry yet";
+    fs::create_directories(fs::path(after_grid).parent_path());
     lanes::testing::paint(layout).save(after_grid);
     const bev_road_t second = bevRoad(*after, after_grid);
     lcm.publish("BEV_ROAD", &second);
@@ -406,6 +407,7 @@ TEST(LaneMapperProcess, AShortRoadMappedWithNoLaneTakesTheLanesOfTheRoadAfterOnc
     ASSERT_TRUE(waitFor(lcm, [&] { return statusCounter(c.status.back(), "roads_mapped") == 3; }, 5));
     EXPECT_EQ(statusCounter(c.status.back(), "roads_mapped_again"), 1);
     EXPECT_EQ(statusCounter(c.status.back(), "roads_lanes_carried"), 1);
+    EXPECT_EQ(statusCounter(c.status.back(), "roads_failed", 0), 0);
     EXPECT_GE(proc.stop(), 0);
   }
   ASSERT_EQ(mapsOf(after->id).size(), 1u);

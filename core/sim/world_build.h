@@ -189,7 +189,7 @@ class Builder {
   map::LaneMap& truth() { return impl_->truth; }
   int64_t nextId() { return next_id_++; }
 
-  // ---------- surface ----------
+  // ---------- surface (world_surface.cc) ----------
   void makeTerrain();
 
   double terrainAt(const Vector2d& p) const { return o_.flat ? 0.0 : impl_->terrain.at(p.x(), p.y()); }
@@ -197,7 +197,8 @@ class Builder {
   // Road-surface offset of a point at actual offset d of a cross-section (crown, curb step).
   double profileAt(const CrossSection& xs, double s, double d, double left_curb, double right_curb) const;
 
-  // ---------- cross-sections ----------
+  // ---------- cross-sections (world_cross_sections.cc; addFill, stripPolygon, emitLinePaint,
+  // emitStroke, chooseGaps, emitCrosswalk, emitStopLine: world_paint.cc) ----------
   void groupCrossSections();
   void layoutCrossSection(CrossSection& xs);
 
@@ -283,7 +284,7 @@ class Builder {
   void shareOpposedIntersectionBounds();
   void emitStopLine(const CrossSection& xs, const Section& sec, int k, double s);
 
-  // ---------- intersections ----------
+  // ---------- intersections (world_junctions.cc) ----------
   static TurnDirection classify(const Vector2d& tin, const Vector2d& tout) {
     return intersections::turnDirection(tin, tout, 40.0);
   }
@@ -350,7 +351,7 @@ class Builder {
     return h;
   }
 
-  // ---------- obstacles ----------
+  // ---------- obstacles (world_obstacles.cc; fillStats: world_builder.cc) ----------
   struct Circle {
     Vector2d c;
     double r;

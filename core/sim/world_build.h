@@ -397,6 +397,9 @@ class Builder {
   void addCar(const CrossSection& xs, std::mt19937_64& r, const geom::Rect& rect, double s, double dcan);
 
   // A car stopped at the curb of a bus bay (asphalt beside the lanes, not a driving lane).
+  // The columns of side k's edge strip (parking, bike lane, bus bay) in a section: its outer edge
+  // and the outer edge of the outermost lane (-1 where there is none).
+  std::pair<int, int> edgeStripColumns(const Section& sec, int k, const Side& sd) const;
   void placeBayCar(const CrossSection& xs, int k, std::mt19937_64& r);
   void placeParkedCars(const CrossSection& xs, std::mt19937_64& r);
   void placeBuildings(const CrossSection& xs, std::mt19937_64& r);

@@ -92,6 +92,16 @@ void Builder::addCar(const CrossSection& xs, std::mt19937_64& r, const geom::Rec
   ++impl_->stats.parked_cars;
 }
 
+std::pair<int, int> Builder::edgeStripColumns(const Section& sec, int k, const Side& sd) const {
+  int edge_col = -1, lane_col = -1;
+  for (int c = 0; c < static_cast<int>(sec.cols.size()); ++c) {
+    if (sec.cols[c].side != k) continue;
+    if (sec.cols[c].kind == ColKind::kEdgeOuter) edge_col = c;
+    if (sec.cols[c].kind == ColKind::kLaneOuter && sec.cols[c].lane + 1 == static_cast<int>(sd.lane_w.size())) lane_col = c;
+  }
+  return {edge_col, lane_col};
+}
+
 void Builder::placeBayCar(const CrossSection& xs, int k, std::mt19937_64& r) {
   const Side& sd = xs.side[k];
   if (!sd.bay || !chance(r, 0.5)) return;
@@ -99,12 +109,7 @@ void Builder::placeBayCar(const CrossSection& xs, int k, std::mt19937_64& r) {
   const Section* sec = sectionContaining(xs, sd.bay_s0, sd.bay_s1);
   if (!sec) return;
   const auto v = columnValues(xs, *sec, mid);
-  int edge_col = -1, lane_col = -1;
-  for (int c = 0; c < static_cast<int>(sec->cols.size()); ++c) {
-    if (sec->cols[c].side != k) continue;
-    if (sec->cols[c].kind == ColKind::kEdgeOuter) edge_col = c;
-    if (sec->cols[c].kind == ColKind::kLaneOuter && sec->cols[c].lane + 1 == static_cast<int>(sd.lane_w.size())) lane_col = c;
-  }
+  const auto [edge_col, lane_col] = edgeStripColumns(*sec, k, sd);
   if (edge_col < 0 || lane_col < 0) return;
   const double len = 4.6;
   if (xs.line.tangentAt(mid - len).dot(xs.line.tangentAt(mid + len)) < std::cos(5.0 * kPi / 180.0)) return;
@@ -133,12 +138,7 @@ void Builder::placeParkedCars(const CrossSection& xs, std::mt19937_64& r) {
       const bool straight = xs.line.tangentAt(s).dot(xs.line.tangentAt(s + len)) > std::cos(5.0 * kPi / 180.0);
       if (sec && straight && chance(r, o_.parked_car_occupancy)) {
         const auto v = columnValues(xs, *sec, mid);
-        int edge_col = -1, lane_col = -1;
-        for (int c = 0; c < static_cast<int>(sec->cols.size()); ++c) {
-          if (sec->cols[c].side != k) continue;
-          if (sec->cols[c].kind == ColKind::kEdgeOuter) edge_col = c;
-          if (sec->cols[c].kind == ColKind::kLaneOuter && sec->cols[c].lane + 1 == static_cast<int>(sd.lane_w.size())) lane_col = c;
-        }
+        const auto [edge_col, lane_col] = edgeStripColumns(*sec, k, sd);
         // Nor where the strip shifts sideways (a turn pocket's taper).
         const auto va = columnValues(xs, *sec, s), vb = columnValues(xs, *sec, s + len);
         const bool steady = edge_col >= 0 && lane_col >= 0 &&

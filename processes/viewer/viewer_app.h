@@ -8,6 +8,8 @@
 //
 //   lanemap-viewer --osm roads.osm [--config config/viewer.yaml] [--listen 127.0.0.1] [--port 8765]
 //   lanemap-viewer --store DIR --osm roads.osm     browse a finished map store: no LCM at all
+//   lanemap-viewer --osm roads.osm --replay IN.lcmlog --replay-out OUT.lcmlog --state-out S.jsonl --port 0
+//                                                  process replay: the state the inputs leave
 //
 // Endpoints: / (the page), /api/state, /api/events (text/event-stream), /api/skeleton.geojson,
 // /api/lanes.geojson, /api/trail?from=N, /api/bev.png, /download/lane_map.osm (Lanelet2),
@@ -214,12 +216,16 @@ inline viewer::HttpResponse text(int status, std::string body) {
   return r;
 }
 
-inline viewer::HttpResponse json(std::string body) {
+inline viewer::HttpResponse body(std::string content_type, std::string content, std::pair<std::string, std::string> header) {
   viewer::HttpResponse r;
-  r.content_type = "application/json";
-  r.body = std::move(body);
-  r.headers.emplace_back("Cache-Control", "no-store");
+  r.content_type = std::move(content_type);
+  r.body = std::move(content);
+  r.headers.push_back(std::move(header));
   return r;
+}
+
+inline viewer::HttpResponse json(std::string content) {
+  return body("application/json", std::move(content), {"Cache-Control", "no-store"});
 }
 
 inline int64_t queryInt(const std::string& query, const std::string& key, int64_t fallback) {
@@ -245,20 +251,12 @@ inline viewer::HttpHandler makeHandler(viewer::ViewerState& state, std::map<std:
     if (p == "/api/bev.png") {
       std::string png = state.bevPng();
       if (png.empty()) return text(404, "no BEV yet\n");
-      viewer::HttpResponse r;
-      r.content_type = "image/png";
-      r.body = std::move(png);
-      r.headers.emplace_back("Cache-Control", "no-store");
-      return r;
+      return body("image/png", std::move(png), {"Cache-Control", "no-store"});
     }
     if (p == "/download/lane_map.osm") {
       std::string xml = state.lanelet2Xml();
       if (xml.empty()) return text(404, "nothing mapped yet\n");
-      viewer::HttpResponse r;
-      r.content_type = "application/xml";
-      r.body = std::move(xml);
-      r.headers.emplace_back("Content-Disposition", "attachment; filename=\"lane_map.osm\"");
-      return r;
+      return body("application/xml", std::move(xml), {"Content-Disposition", "attachment; filename=\"lane_map.osm\""});
     }
     if (p == "/download/lane_map.geojson") {
       viewer::HttpResponse r = json(state.lanesGeoJson());
@@ -279,6 +277,131 @@ inline viewer::HttpHandler makeHandler(viewer::ViewerState& state, std::map<std:
 inline std::string defaultAssets() {
   const fs::path bin = executableDir();
   return bin.empty() ? "" : (bin.parent_path() / "share" / "lanemap" / "viewer").string();
+}
+
+// The command line's own flags (the framework's --config, --lcm-url, --replay come with Process).
+struct ViewerFlags {
+  std::string osm, store, listen, assets, url_file, state_out;
+  int port = -1;
+
+  void add(CLI::App& cli) {
+    cli.description(
+        "lanemap-viewer: the live map in a web browser (car, BEV, mapped lanes, coverage, process health).\n"
+        "Live: lanemap-viewer --osm roads.osm   (subscribes to POSE, ROAD_EVENT, BEV_ROAD, LANE_MAP, STATUS)\n"
+        "Store: lanemap-viewer --store DIR --osm roads.osm   (a finished map store, no LCM)\n"
+        "Then open the URL it prints (default http://127.0.0.1:8765/).");
+    cli.add_option("--osm", osm, "OSM file of the skeleton (default: the osm of the config's map: file)");
+    cli.add_option("--store", store, "browse this finished map store (lanes/, graph.lcmlog) instead of the bus");
+    cli.add_option("--listen", listen, "address to listen on (default: config listen, else 127.0.0.1; 0.0.0.0 = every interface)");
+    cli.add_option("--port", port, "TCP port (default: config port, else 8765; 0 = any free port)")->check(CLI::Range(0, 65535));
+    cli.add_option("--assets", assets, "folder of the page (default: config assets, else <bin>/../share/lanemap/viewer)");
+    cli.add_option("--url-file", url_file, "write the page's URL to this file once listening (scripts, tests)");
+    cli.add_option("--state-out", state_out,
+                   "on exit, write what the page would show as JSON lines: the state (processes aside), the "
+                   "roads driven or mapped, the lanes' GeoJSON (process replay, tests/replay)");
+  }
+};
+
+// Browsing a store needs no bus: the process framework then gets an in-process LCM (memq://),
+// which sends nothing anywhere. The arguments to give the framework; empty when --store and
+// --lcm-url are both given (said on stderr).
+inline std::vector<char*> busArguments(int argc, char** argv) {
+  std::vector<char*> args(argv, argv + argc);
+  bool store_mode = false, url_given = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--store" || a.rfind("--store=", 0) == 0) store_mode = true;
+    if (a == "--lcm-url" || a.rfind("--lcm-url=", 0) == 0) url_given = true;
+  }
+  static char lcm_flag[] = "--lcm-url=memq://";
+  if (store_mode && url_given) {
+    std::cerr << "viewer: --store browses a finished map store without LCM; drop --lcm-url\n";
+    return {};
+  }
+  if (store_mode) args.push_back(lcm_flag);
+  return args;
+}
+
+// What a person sees, without what depends on the wall clock (the processes' ages): the lines of
+// --state-out.
+inline std::string stateLines(viewer::ViewerState& state) {
+  nlohmann::json s = state.stateValue(monotonicSeconds());
+  s.erase("processes");
+  nlohmann::json coverage = nlohmann::json::object();
+  for (const auto& r : state.skeleton().roads()) {  // the roads driven or mapped (the rest: never driven)
+    const viewer::Coverage c = state.coverage(r.id);
+    if (c != viewer::Coverage::kNeverDriven) coverage[std::to_string(r.id)] = viewer::toString(c);
+  }
+  return nlohmann::json{{"state", s}}.dump() + "\n" + nlohmann::json{{"coverage", coverage}}.dump() + "\n" +
+         nlohmann::json{{"lanes", nlohmann::json::parse(state.lanesGeoJson())}}.dump() + "\n";
+}
+
+// The process, after Process::init: the skeleton, the state fed from the bus or a store, the HTTP
+// server until the process is stopped (or its replay ends). Returns the exit code.
+inline int run(Process& process, const ViewerFlags& flags) {
+  try {
+    const auto settings = ViewerSettings::fromYaml(process.settings());
+    process.settings().finish();
+    const std::string osm = flags.osm.empty() ? settings.map.osm : flags.osm;
+    const std::string listen = flags.listen.empty() ? settings.server.address : flags.listen;
+    const int port = flags.port >= 0 ? flags.port : settings.server.port;
+    std::string assets = flags.assets.empty() ? settings.assets : flags.assets;
+    if (assets.empty()) assets = defaultAssets();
+    if (osm.empty()) throw std::runtime_error("no OSM file: give --osm or `osm:` in the map config");
+
+    const osm::OsmData osm_data = osm::readOsm(osm);
+    auto sk = std::make_shared<const skeleton::Skeleton>(skeleton::Skeleton::build(osm_data, settings.map.skeleton));
+    viewer::ViewerOptions vo = settings.viewer;
+    if (!flags.store.empty()) {
+      // A finished run: its last STATUS is old by nature; show it as recorded, drops included,
+      // without calling anything behind for being silent or for drops long past.
+      vo.status_stale_s = std::numeric_limits<double>::infinity();
+      vo.loss_window_s = -1.0;
+    }
+    viewer::ViewerState state(sk, osm_data.restrictions, settings.intersections, vo);
+
+    viewer::HttpServerOptions so = settings.server;
+    so.address = listen;
+    so.port = static_cast<uint16_t>(port);
+    auto assets_map = viewer::loadAssets(assets);
+    if (!assets_map.count("/index.html")) throw std::runtime_error("viewer assets: no index.html in " + assets);
+
+    std::unique_ptr<LiveFeed> feed;
+    if (!flags.store.empty()) {
+      loadStore(flags.store, state);
+    } else {
+      feed = std::make_unique<LiveFeed>(process, state, settings.pose_queue);
+    }
+    auto events = [&state](uint64_t& last) -> std::string {
+      const uint64_t v = state.version();
+      if (v == last) return "";
+      last = v;
+      return "event: state\ndata: " + state.stateJson(monotonicSeconds()) + "\n\n";
+    };
+    viewer::HttpServer server(so, makeHandler(state, std::move(assets_map), process.counters()), events);
+    server.start();
+    const std::string host = listen.find(':') != std::string::npos ? "[" + listen + "]" : listen;
+    const std::string url = "http://" + (listen == "0.0.0.0" ? std::string("127.0.0.1") : host) + ":" + std::to_string(server.port()) + "/";
+    std::cerr << "viewer: " << sk->roads().size() << " atomic roads from " << osm
+              << (flags.store.empty() ? "" : ", store " + flags.store) << "; open " << url << "\n";
+    if (!flags.url_file.empty()) {
+      const std::string tmp = flags.url_file + ".tmp";
+      std::ofstream(tmp) << url << "\n";
+      fs::rename(tmp, flags.url_file);
+    }
+    process.setState("ready");
+    const int rc = process.spin();
+    server.stop();
+    if (!flags.state_out.empty()) {
+      std::ofstream out(flags.state_out, std::ios::binary);
+      out << stateLines(state);
+      if (!out) throw std::runtime_error("cannot write " + flags.state_out);
+    }
+    return rc;
+  } catch (const std::exception& e) {
+    std::cerr << "viewer: " << e.what() << "\n";
+    return 2;
+  }
 }
 
 }  // namespace lanemap::viewer_app

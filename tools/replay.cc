@@ -8,6 +8,11 @@
 //   lanemap-replay --update        writes the new references (prints what changed first);
 //                                  then `git diff tests/replay` shows it for review
 //   lanemap-replay --only NAME --keep    one case (and those before it), the work folder kept
+//
+// A case's input is one log, a list of logs (merged in time order: the viewer takes the poses and
+// what the other processes published), or none (a driver reading its own file: only what it
+// publishes is recorded). output_file: JSON lines the command writes besides (the viewer's state).
+#include "processes/framework/log_reader.h"
 #include "processes/framework/message_json.h"
 
 #include <CLI/CLI.hpp>
@@ -64,6 +69,36 @@ int run(const std::vector<std::string>& args, const std::string& log, const std:
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+// Several input logs as one, in time order (a tie keeps the order of the list, then of the log):
+// the viewer's case takes the poses and what the other processes published on them.
+void mergeLogs(const std::vector<fs::path>& inputs, const std::string& out) {
+  struct Event {
+    int64_t t;
+    size_t log, index;
+    std::string channel, data;
+  };
+  std::vector<Event> events;
+  for (size_t l = 0; l < inputs.size(); ++l) {
+    lanemap::LogReader in(inputs[l].string());
+    for (size_t i = 0; const lcm::LogEvent* ev = in.next(); ++i) {
+      events.push_back({ev->timestamp, l, i, ev->channel, std::string(static_cast<const char*>(ev->data), static_cast<size_t>(ev->datalen))});
+    }
+  }
+  std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) { return a.t < b.t; });
+  lcm::LogFile log(out, "w");
+  if (!log.good()) throw std::runtime_error("cannot write " + out);
+  int64_t n = 0;
+  for (auto& e : events) {
+    lcm::LogEvent ev;
+    ev.eventnum = n++;
+    ev.timestamp = e.t;
+    ev.channel = e.channel;
+    ev.datalen = static_cast<int32_t>(e.data.size());
+    ev.data = e.data.data();
+    log.writeEvent(&ev);
+  }
+}
+
 std::string readFile(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   std::stringstream ss;
@@ -106,7 +141,7 @@ int main(int argc, char** argv) {
       for (const auto& k : c) {
         const auto key = k.first.as<std::string>();
         if (key != "name" && key != "command" && key != "input" && key != "reference" && key != "ignore" && key != "what" &&
-            key != "abs_tolerance" && key != "rel_tolerance") {
+            key != "abs_tolerance" && key != "rel_tolerance" && key != "output_file") {
           throw std::runtime_error(list.string() + ": unknown key `" + key + "` in a case");
         }
       }
@@ -115,10 +150,22 @@ int main(int argc, char** argv) {
       for (const auto& a : c["command"]) args.push_back(expand(a.as<std::string>(), vars));
       if (args.empty()) throw std::runtime_error("case " + name + ": empty command");
       if (args[0].rfind("lanemap-", 0) == 0) args[0] = (bin / args[0]).string();
-      const fs::path input = src / expand(c["input"].as<std::string>(), vars);
       const fs::path reference = src / c["reference"].as<std::string>();
       const std::string out = (fs::path(work) / (name + ".out.lcmlog")).string();
-      args.insert(args.end(), {"--replay", input.string(), "--replay-out", out});
+      // input: one log, a list of logs (merged in time order), or none (the command reads its own
+      // input, as a driver reads a file: the process only records what it publishes).
+      if (c["input"] && c["input"].IsSequence()) {
+        std::vector<fs::path> logs;
+        for (const auto& i : c["input"]) logs.push_back(src / expand(i.as<std::string>(), vars));
+        const std::string merged = (fs::path(work) / (name + ".input.lcmlog")).string();
+        mergeLogs(logs, merged);
+        args.insert(args.end(), {"--replay", merged});
+      } else if (c["input"]) {
+        args.insert(args.end(), {"--replay", (src / expand(c["input"].as<std::string>(), vars)).string()});
+      }
+      args.insert(args.end(), {"--replay-out", out});
+      // output_file: JSON lines the command writes besides what it publishes (compared after them).
+      const std::string output_file = c["output_file"] ? expand(c["output_file"].as<std::string>(), vars) : "";
       std::set<std::string> ignore;
       if (c["ignore"]) {
         for (const auto& ch : c["ignore"]) ignore.insert(ch.as<std::string>());
@@ -138,6 +185,10 @@ int main(int argc, char** argv) {
         for (std::string l; std::getline(all, l);) {
           const auto j = nlohmann::json::parse(l);
           if (!ignore.count(j["channel"].get<std::string>())) lines += l + "\n";
+        }
+        if (!output_file.empty()) {
+          if (!fs::exists(output_file)) throw std::runtime_error("case " + name + ": the command wrote no " + output_file);
+          lines += readFile(output_file);
         }
       }
       const bool compared = only.empty() || name == only;

@@ -6,6 +6,9 @@
 #include "lanemap/bev_road_t.hpp"
 #include "lanemap/label_image_t.hpp"
 #include "lanemap/lane_map_t.hpp"
+#include "lanemap/lidar_packets_t.hpp"
+#include "lanemap/lidar_points_t.hpp"
+#include "lanemap/pose_t.hpp"
 #include "lanemap/road_event_t.hpp"
 #include "processes/framework/channels.h"
 #include "processes/framework/log_reader.h"
@@ -110,6 +113,45 @@ nlohmann::json messageJson(const std::string& channel, const void* data, int siz
     return {{"road_id", m.road_id}, {"num_frames", m.num_frames}, {"west", m.west}, {"south", m.south},
             {"east", m.east}, {"north", m.north}, {"png_bytes", m.size}};  // utime is the wall clock
   }
+  if (type == "lanemap.pose_t") {
+    const auto m = decode<pose_t>(channel, data, size);
+    auto array = [](const double* v, int n) { return nlohmann::json(std::vector<double>(v, v + n)); };
+    return {{"utime", m.utime}, {"latitude", m.latitude}, {"longitude", m.longitude}, {"altitude", m.altitude},
+            {"orientation", array(m.orientation, 4)}, {"velocity_enu", array(m.velocity_enu, 3)},
+            {"angular_rate", array(m.angular_rate, 3)}, {"position_covariance", array(m.position_covariance, 9)},
+            {"orientation_covariance", array(m.orientation_covariance, 9)}, {"status", m.status}};
+  }
+  if (type == "lanemap.lidar_packets_t") {
+    // The packets are the sensor's bytes, passed through: their hash; their times as numbers.
+    const auto m = decode<lidar_packets_t>(channel, data, size);
+    uint64_t h = 1469598103934665603ull;
+    for (const auto& p : m.data) h = (h ^ fnv1a(p.data(), static_cast<int>(p.size()))) * 1099511628211ull;
+    return {{"utime", m.utime}, {"model", m.model}, {"num_packets", m.num_packets}, {"packet_size", m.packet_size},
+            {"first_packet_utime", m.packet_utime.empty() ? 0 : m.packet_utime.front()},
+            {"last_packet_utime", m.packet_utime.empty() ? 0 : m.packet_utime.back()}, {"packets_fnv1a", h}};
+  }
+  if (type == "lanemap.lidar_points_t") {
+    // The decoded points summarised: count, per-ring counts, sums and extremes of each coordinate.
+    const auto m = decode<lidar_points_t>(channel, data, size);
+    nlohmann::json coords = nlohmann::json::object();
+    auto summary = [](const std::vector<float>& v) {
+      double sum = 0.0, lo = 0.0, hi = 0.0;
+      for (size_t i = 0; i < v.size(); ++i) {
+        sum += v[i];
+        lo = i ? std::min<double>(lo, v[i]) : v[i];
+        hi = i ? std::max<double>(hi, v[i]) : v[i];
+      }
+      return nlohmann::json{{"sum", sum}, {"min", lo}, {"max", hi}};
+    };
+    std::vector<int64_t> rings;
+    for (const int8_t r : m.ring) {
+      if (r >= 0 && static_cast<size_t>(r) >= rings.size()) rings.resize(static_cast<size_t>(r) + 1, 0);
+      if (r >= 0) ++rings[static_cast<size_t>(r)];
+    }
+    return {{"utime", m.utime}, {"num_points", m.num_points}, {"x", summary(m.x)}, {"y", summary(m.y)},
+            {"z", summary(m.z)}, {"intensity", summary(m.intensity)}, {"time_offset", summary(m.time_offset)},
+            {"points_per_ring", rings}};
+  }
   return {{"bytes", size}, {"fnv1a", fnv1a(data, size)}};
 }
 
@@ -193,7 +235,11 @@ std::vector<std::string> compareJsonLines(const std::string& reference, const st
   std::vector<std::string> out;
   const size_t n = std::min(ref.size(), act.size());
   for (size_t i = 0; i < n && out.size() < max_lines; ++i) {
-    const std::string where = "line " + std::to_string(i + 1) + " (" + ref[i].value("channel", std::string("?")) + ")";
+    // A message's line is named by its channel; a line a process wrote itself by its first key.
+    const std::string name = ref[i].contains("channel") ? ref[i].value("channel", std::string("?"))
+                             : ref[i].is_object() && !ref[i].empty() ? ref[i].begin().key()
+                                                                     : std::string("?");
+    const std::string where = "line " + std::to_string(i + 1) + " (" + name + ")";
     compareValue(ref[i], act[i], where, abs_tol, rel_tol, out, max_lines);
   }
   if (ref.size() != act.size() && out.size() < max_lines) {

@@ -107,9 +107,10 @@ Process::Process(std::string name)
   auto* in = cli_.add_option("--replay", replay_in_,
                              "process replay: handle every event of this LCM log in order on an in-process bus "
                              "(memq://), one at a time, then exit (tests/replay)");
-  auto* out = cli_.add_option("--replay-out", replay_out_, "... and write what the process publishes to this LCM log");
+  auto* out = cli_.add_option("--replay-out", replay_out_,
+                              "... and write what the process publishes to this LCM log; alone: the process reads its "
+                              "own input (a driver's --file or --pcap) on an in-process bus and this log records its output");
   in->needs(out);
-  out->needs(in);
 }
 
 Process::~Process() {
@@ -136,8 +137,8 @@ int Process::init(int argc, char** argv) {
     std::cerr << name_ << ": " << e.what() << "\n";
     return 2;
   }
-  const std::string url = replaying() ? std::string("memq://") : resolveLcmUrl(lcm_url_flag_, config_);
-  if (replaying()) {
+  const std::string url = recording() ? std::string("memq://") : resolveLcmUrl(lcm_url_flag_, config_);
+  if (recording()) {
     replay_log_ = std::make_unique<lcm::LogFile>(replay_out_, "w");
     if (!replay_log_->good()) {
       std::cerr << name_ << ": cannot write the replay output '" << replay_out_ << "'\n";
@@ -149,7 +150,7 @@ int Process::init(int argc, char** argv) {
     std::cerr << name_ << ": cannot open LCM '" << (url.empty() ? "(default)" : url) << "'\n";
     return 3;
   }
-  if (replaying()) lcm_->subscribe(".*", &Process::onReplayMessage, this);  // first: sees every message
+  if (recording()) lcm_->subscribe(".*", &Process::onReplayMessage, this);  // first: sees every message
   g_stop.store(false);
   struct sigaction sa {};
   sa.sa_handler = onSignal;

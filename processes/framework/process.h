@@ -97,7 +97,12 @@ class Process {
   // Whatever the app publishes after spin() (a finish() at the end of the drive) is collected when
   // the Process is destroyed. A process with a worker thread says when it is idle (setIdleCheck):
   // the replay waits for it after every input, so the output does not depend on the machine.
+  //
+  // `--replay-out OUT.lcmlog` alone is the replay of a process that reads its own input (a driver's
+  // --file or --pcap): it runs as usual on an in-process bus and OUT records what it publishes
+  // (STATUS aside), each stamped 0 (there is no input event to answer).
   bool replaying() const { return !replay_in_.empty(); }
+  bool recording() const { return !replay_out_.empty(); }
   void setIdleCheck(std::function<bool()> idle) { idle_ = std::move(idle); }
 
   // Publishes one STATUS message now (spin() calls it at 1 Hz).

@@ -1,6 +1,7 @@
 // Process replay (issue 19, openpilot's manner): every case of tests/replay/cases.yaml (the road
-// tracker, the BEV builder, the lane mapper, the segmenter on the shipped model, each over its
-// recorded input) publishes what its reference says; a reference changed by more than the
+// tracker, the BEV builder, the lane mapper, the segmenter on the shipped model, the viewer, each
+// over its recorded input; the NMEA and VLP-16 drivers over the files they read) publishes what
+// its reference says; a reference changed by more than the
 // tolerance fails, naming the message and the field, and passes within a case's own tolerance; the comparison itself (processes/framework/message_json.h) tells a number within the
 // tolerance from one beyond it, a missing field, a new one and a missing message.
 #include "processes/framework/message_json.h"
@@ -38,7 +39,11 @@ TEST(ProcessReplay, EveryProcessPublishesWhatItsReferenceSays) {
   EXPECT_EQ(r.rc, 0) << r.out;
   for (const char* line : {"road_tracker: 3 messages, as the reference", "bev_builder: 2 messages, as the reference",
                            "lane_mapper: 2 messages, as the reference", "segmenter: 7 messages, as the reference",
-                           "4 case(s) run, 0 differ"}) {
+                           // the page's state, the roads driven or mapped, the lanes' GeoJSON
+                           "viewer: 3 messages, as the reference",
+                           // 31 epochs, one without a fix; 12 whole rotations of 1000 packets, packets and points
+                           "pose_nmea: 30 messages, as the reference", "lidar_vlp16: 24 messages, as the reference",
+                           "7 case(s) run, 0 differ"}) {
     EXPECT_NE(r.out.find(line), std::string::npos) << line << "\n" << r.out;
   }
 }
@@ -71,6 +76,54 @@ TEST(ProcessReplay, AReferenceChangedBeyondTheToleranceFailsNamingTheField) {
   std::ofstream(tmp.str("cases.yaml"), std::ios::app) << "    abs_tolerance: 0.01\n";
   const ReplayRun loose = run("--cases " + tmp.str("cases.yaml"));
   EXPECT_EQ(loose.rc, 0) << loose.out;
+}
+
+// A driver's case (no input log: it reads its own file) and the viewer's (several input logs
+// merged, its state written to a file) fail on a changed reference too, naming the field.
+TEST(ProcessReplay, ADriversRecordingAndTheViewersStateFailWhenTheyDifferFromTheirReference) {
+  lt::TempDir tmp("replay");
+  std::string pose_ref = readFile(kSource + "/tests/replay/pose_nmea.reference.jsonl");
+  auto first = nlohmann::json::parse(pose_ref.substr(0, pose_ref.find('\n')));
+  first["msg"]["latitude"] = first["msg"]["latitude"].get<double>() + 1e-5;  // 1.1 m north
+  std::ofstream(tmp.str("pose.jsonl")) << first.dump() << "\n" << pose_ref.substr(pose_ref.find('\n') + 1);
+  std::ofstream(tmp.str("cases.yaml"))
+      << "cases:\n"
+      << "  - name: pose_nmea\n"
+      << "    command: [lanemap-pose-nmea, --config, config/pose_nmea.yaml, --file, tests/replay/pose_nmea.input.nmea]\n"
+      << "    reference: " << tmp.str("pose.jsonl") << "\n"
+      // The viewer over the poses and the road tracker's own recorded events: the car, its trail,
+      // the roads driven; no lanes.
+      << "  - name: road_tracker\n"
+      << "    command: [lanemap-road-tracker, --config, config/road_tracker.yaml, --osm, tests/replay/roads.osm]\n"
+      << "    input: tests/replay/road_tracker.input.lcmlog\n"
+      << "    reference: tests/replay/road_tracker.reference.jsonl\n"
+      << "  - name: viewer\n"
+      << "    command: [lanemap-viewer, --config, config/viewer.yaml, --osm, tests/replay/roads.osm, --port, '0',\n"
+      << "              --state-out, '${work}/state.jsonl']\n"
+      << "    input: [tests/replay/road_tracker.input.lcmlog, '${work}/road_tracker.out.lcmlog']\n"
+      << "    output_file: '${work}/state.jsonl'\n"
+      << "    reference: " << tmp.str("viewer.jsonl") << "\n";
+  const ReplayRun r = run("--cases " + tmp.str("cases.yaml"));
+  EXPECT_EQ(r.rc, 1) << r.out;
+  EXPECT_NE(r.out.find("line 1 (POSE).msg.latitude"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("viewer: 3 messages, not as the reference"), std::string::npos) << r.out;  // none yet
+  ASSERT_EQ(run("--cases " + tmp.str("cases.yaml") + " --update").rc, 0);
+  const std::string state = readFile(tmp.str("viewer.jsonl"));
+  const auto s = nlohmann::json::parse(state.substr(0, state.find('\n')))["state"];
+  // 451 poses of the 18 s drive at 25 Hz; the road it entered and the one it closed driven, none mapped.
+  EXPECT_EQ(s["car"]["poses"], 451);
+  EXPECT_EQ(s["closed_roads"], nlohmann::json::array({4}));
+  EXPECT_EQ(s["coverage"]["mapped"], 0);
+  EXPECT_EQ(s["coverage"]["driven"], 2);
+  EXPECT_EQ(s["map"]["road_lanes"], 0);
+  EXPECT_EQ(run("--cases " + tmp.str("cases.yaml")).rc, 0);
+  // One more road driven in the reference than the viewer saw: named.
+  auto changed = nlohmann::json::parse(state.substr(0, state.find('\n')));
+  changed["state"]["coverage"]["driven"] = 3;
+  std::ofstream(tmp.str("viewer.jsonl")) << changed.dump() << "\n" << state.substr(state.find('\n') + 1);
+  const ReplayRun v = run("--cases " + tmp.str("cases.yaml"));
+  EXPECT_EQ(v.rc, 1) << v.out;
+  EXPECT_NE(v.out.find("line 1 (state).state.coverage.driven: 3 -> 2"), std::string::npos) << v.out;
 }
 
 TEST(MessageJson, NumbersWithinTheToleranceAgreeEverythingElseExactly) {

@@ -27,6 +27,10 @@
 // (`intersections:`, config/intersections.yaml), as the lane mapper reads them; --tracker-config
 // and --bev-config are the road tracker's and the BEV builder's files. --osm is required here.
 //
+// In two halves (lanemap-city runs them on several cores or Slurm nodes): `--log D --project-only
+// DIR` projects one drive and keeps what its BEV builder hands over (DriveProjection), `--traversals
+// DIR ...` maps projected drives in the order given, as their logs would have been mapped.
+//
 // The road being driven when a log ends never closed: it is explored on what was driven, as far as
 // the car's last pose (core/mapping/partial_road.h), and its lanelets are tagged partial with that
 // station and the road's length (the map's sidecar and GeoJSON; summary.json roads[].partial). Its
@@ -75,6 +79,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <limits>
 #include <memory>
@@ -88,6 +93,8 @@ namespace {
 
 struct Options {
   std::vector<std::string> logs;  // one drive each, mapped in this order into one map
+  std::string project_only;       // the one drive's traversals saved to this folder, not mapped
+  std::vector<std::string> traversals;  // drives projected before (--project-only folders), mapped in this order
   bool no_align = false;          // merge later drives' BEV unaligned (to measure what alignment does)
   std::string osm, out;
   std::string semantic_channel;  // empty: segment CAMERA_FRONT with the model
@@ -129,6 +136,54 @@ bool decode(const lcm::LogEvent& ev, T& msg) {
   if (msg.decode(ev.data, 0, static_cast<int>(ev.datalen)) >= 0) return true;
   ++g_undecodable;
   return false;
+}
+
+// A drive projected and not mapped (--project-only DIR): the traversals its BEV builder handed
+// over, in order, each a grid file, and the road it ended on with its last position, beside a
+// manifest (projection.json, written last: a folder without one is an interrupted projection).
+// --traversals DIR maps them as --log would have at that point: the same roads, grids and order,
+// so drives projected apart (lanemap-city: on several cores or machines) fuse into the same map.
+constexpr int kProjectionFormat = 1;
+
+class DriveProjection {
+ public:
+  explicit DriveProjection(std::string dir) : dir_(std::move(dir)) {
+    fs::create_directories(dir_);
+    manifest_ = {{"lanemap_projection", kProjectionFormat}, {"closed", nlohmann::json::array()}, {"open", nullptr}};
+  }
+  void closed(const bev::RoadBev& road) {
+    const std::string file = "traversal_" + std::to_string(manifest_["closed"].size()) + ".bev";
+    road.grid.save((fs::path(dir_) / file).string());
+    manifest_["closed"].push_back({{"road_id", road.road_id}, {"file", file}});
+  }
+  void open(const bev::RoadBev& road, const Eigen::Vector2d& last_position) {
+    road.grid.save((fs::path(dir_) / "open.bev").string());
+    manifest_["open"] = {{"road_id", road.road_id}, {"file", "open.bev"}, {"last_position", {last_position.x(), last_position.y()}}};
+  }
+  // The drive's figures (summary.json's), then the manifest.
+  void finish(const nlohmann::json& figures) {
+    for (const auto& [k, v] : figures.items()) manifest_[k] = v;
+    io::writeFileAtomically((fs::path(dir_) / "projection.json").string(), manifest_.dump(2) + "\n");
+  }
+
+ private:
+  std::string dir_;
+  nlohmann::json manifest_;
+};
+
+// A projection folder's manifest, checked (a clear error for a folder that is not one, or one of
+// another format).
+nlohmann::json readProjection(const std::string& dir) {
+  const fs::path path = fs::path(dir) / "projection.json";
+  if (!fs::exists(path)) throw std::runtime_error(dir + ": not a drive projection (no projection.json; interrupted?)");
+  std::ifstream in(path);
+  nlohmann::json m = nlohmann::json::parse(in, nullptr, false);
+  if (m.is_discarded() || !m.is_object()) throw std::runtime_error(path.string() + ": not JSON");
+  if (m.value("lanemap_projection", 0) != kProjectionFormat) {
+    throw std::runtime_error(path.string() + ": projection format " + m.value("lanemap_projection", nlohmann::json(nullptr)).dump() +
+                             ", this lanemap reads " + std::to_string(kProjectionFormat) + ": project the drive again");
+  }
+  return m;
 }
 
 class OfflineMapper {
@@ -207,6 +262,34 @@ class OfflineMapper {
     mapPartialRoad();
   }
 
+  // --project-only: what the drive's BEV builder hands over goes to `p`, nothing is mapped.
+  void projectInto(DriveProjection* p) { projection_ = p; }
+  // --traversals: one drive's projection, mapped as its log would have been.
+  void mapProjection(const std::string& dir, const nlohmann::json& m) {
+    for (const auto& c : m.at("closed")) {
+      bev::RoadBev road;
+      road.road_id = c.at("road_id").get<int64_t>();
+      road.grid = bev::BevGrid::load((fs::path(dir) / c.at("file").get<std::string>()).string());
+      mapTraversal(road);
+    }
+    if (const auto& open = m.at("open"); !open.is_null()) {
+      bev::RoadBev road;
+      road.road_id = open.at("road_id").get<int64_t>();
+      road.grid = bev::BevGrid::load((fs::path(dir) / open.at("file").get<std::string>()).string());
+      const auto& p = open.at("last_position");
+      mapOpenRoad(road, Eigen::Vector2d(p.at(0).get<double>(), p.at(1).get<double>()));
+    }
+    frames_projected_ += m.value("frames_projected", int64_t{0});
+    frames_mesh_ += m.value("frames_mesh", int64_t{0});
+    frames_segmented_ += m.value("frames_segmented", int64_t{0});
+    frames_failed_ += m.value("frames_failed", int64_t{0});
+  }
+  // This drive's frames (a projection's figures): its BEV builder's, before endDrive().
+  nlohmann::json driveFrames() const {
+    const auto s = builder_->stats();
+    return {{"frames_projected", s.frames_projected}, {"frames_mesh", s.frames_mesh}};
+  }
+
   mapping::MapAssembler& assembler() { return assembler_; }
   int roadsMapped() const { return roads_mapped_; }
   int64_t framesSegmented() const { return frames_segmented_; }
@@ -247,7 +330,13 @@ class OfflineMapper {
   }
 
   void mapClosedRoads() {
-    for (auto& road : builder_->takeClosed()) mapTraversal(road);
+    for (auto& road : builder_->takeClosed()) {
+      if (projection_) {
+        projection_->closed(road);
+      } else {
+        mapTraversal(road);
+      }
+    }
   }
 
   // A traversal of a road that is (now) complete: this drive's evidence of the road accumulates,
@@ -302,16 +391,25 @@ class OfflineMapper {
       if (r.grid.frames() > 0) open = r;  // a copy
     });
     if (!open || !last_position_) return;
-    const auto* r = sk_.road(open->road_id);
-    if (!r) return;
-    if (drive_grids_.count(r->id) || drive_saved_.count(r->id) || prior_.count(r->id) || prior_saved_.count(r->id)) {
-      mapTraversal(*open);
+    if (projection_) {
+      projection_->open(*open, *last_position_);
       return;
     }
-    const double station = mapping::roadStation(*r, *last_position_, explorer_);
-    auto [it, fresh] = partial_.try_emplace(r->id, Partial{open->grid, station, 1});
+    mapOpenRoad(*open, *last_position_);
+  }
+
+  // The road a drive ended on, with the drive's last position (mapPartialRoad, or a projection).
+  void mapOpenRoad(const bev::RoadBev& open, const Eigen::Vector2d& last_position) {
+    const auto* r = sk_.road(open.road_id);
+    if (!r) return;
+    if (drive_grids_.count(r->id) || drive_saved_.count(r->id) || prior_.count(r->id) || prior_saved_.count(r->id)) {
+      mapTraversal(open);
+      return;
+    }
+    const double station = mapping::roadStation(*r, last_position, explorer_);
+    auto [it, fresh] = partial_.try_emplace(r->id, Partial{open.grid, station, 1});
     if (!fresh) {  // another drive ended on it too
-      const bev::Alignment a = bev::mergeAligned(open->grid, it->second.grid, !o_.no_align);
+      const bev::Alignment a = bev::mergeAligned(open.grid, it->second.grid, !o_.no_align);
       drive_log_.push_back({{"road_id", r->id}, {"traversals_before", it->second.traversals}, {"aligned", a.ok},
                             {"shift_m", {a.shift_m.x(), a.shift_m.y()}}, {"correlation", a.correlation},
                             {"overlap_cells", a.overlap_cells}, {"why", a.why}, {"partial", true}});
@@ -412,6 +510,7 @@ class OfflineMapper {
   };
   std::map<int64_t, Partial> partial_;            // roads drives ended on, none closed yet
   std::optional<Eigen::Vector2d> last_position_;  // this drive's newest pose (ENU)
+  DriveProjection* projection_ = nullptr;         // --project-only: the drive's traversals go there
   nlohmann::json partial_not_mapped_ = nlohmann::json::array();
   nlohmann::json drive_log_ = nlohmann::json::array();
   int drives_ = 0;
@@ -448,11 +547,16 @@ int main(int argc, char** argv) {
   CLI::App app{"Maps a recorded drive offline: the live graph's core stages on an LCM log, as fast as the CPU allows.\n"
                "Several --log: drives of one area mapped in that order into one map; a road driven in an earlier\n"
                "drive gets the new drive's BEV aligned to its evidence (core/bev/bev_align.h) and is explored again."};
-  app.add_option("--log", o.logs, "LCM log of the drive (lanemap-sim's drive.lcmlog or an lcm-logger recording); repeatable")
-      ->required();
+  auto* logs = app.add_option("--log", o.logs, "LCM log of the drive (lanemap-sim's drive.lcmlog or an lcm-logger recording); repeatable");
+  auto* traversals = app.add_option("--traversals", o.traversals,
+                 "a drive projected before with --project-only (its folder), mapped in place of its log; repeatable, "
+                 "in the order the drives are to be fused (lanemap-city)")->excludes(logs);
+  app.add_option("--project-only", o.project_only,
+                 "project the one --log drive and save what it hands over per road into this folder (grids and "
+                 "projection.json), without mapping (lanemap-city's first stage; --out gets nothing)")->needs(logs)->excludes(traversals);
   app.add_flag("--no-align", o.no_align, "merge later drives' BEV as it comes, unaligned (shows the blur alignment removes)");
   app.add_option("--osm", o.osm, "road-level OSM file of the area (.osm or .osm.pbf)")->required();
-  app.add_option("--out", o.out, "output folder (created): map.osm, map.geojson, map.png, summary.json, bev/")->required();
+  auto* out = app.add_option("--out", o.out, "output folder (created): map.osm, map.geojson, map.png, summary.json, bev/");
   auto* oracle = app.add_flag("--oracle", o.oracle, "map on the simulator's truth labels (SEMANTIC_FRONT_TRUTH), no model");
   app.add_option("--semantic-channel", o.semantic_channel,
                  "map on the labels of this channel of the log (e.g. SEMANTIC_FRONT from lanemap-segmenter --log-out), no model")
@@ -476,6 +580,18 @@ int main(int argc, char** argv) {
                  "--osm overrides its osm");
   app.add_flag("-q,--quiet", o.quiet, "no progress");
   CLI11_PARSE(app, argc, argv);
+  if (o.logs.empty() == o.traversals.empty()) {
+    std::cerr << "lanemap-offline: give the drives as --log (one or more) or as --traversals (one or more)\n";
+    return 2;
+  }
+  if (!o.project_only.empty() && o.logs.size() != 1) {
+    std::cerr << "lanemap-offline: --project-only projects one drive: give one --log\n";
+    return 2;
+  }
+  if (o.project_only.empty() && !out->count()) {
+    std::cerr << "lanemap-offline: --out is required (the map's folder)\n";
+    return 2;
+  }
 
   try {
     const auto t0 = std::chrono::steady_clock::now();
@@ -485,18 +601,46 @@ int main(int argc, char** argv) {
     for (const auto& l : o.logs) {
       if (!fs::exists(l)) throw std::runtime_error("no such log file: " + l);
     }
+    std::vector<nlohmann::json> projections;  // --traversals: each folder's manifest, read before any work
+    for (const auto& t : o.traversals) projections.push_back(readProjection(t));
+    if (!o.project_only.empty()) o.out = o.project_only;  // a projection writes only its folder
     const OfflineConfig config = loadConfig(o);
     const osm::OsmData osm_data = osm::readOsm(o.osm);
     const auto sk = skeleton::Skeleton::build(osm_data, config.lanes.map.skeleton);
     if (o.oracle) o.semantic_channel = channels::kSemanticFrontTruth;
     std::unique_ptr<seg::Segmenter> model;
-    if (o.semantic_channel.empty()) model = loadModel(o);
-    const std::string labels = model ? "model " + model->name() + " on " + channels::kCameraFront : o.semantic_channel;
-    fs::create_directories(fs::path(o.out) / "bev");
+    if (o.semantic_channel.empty() && o.traversals.empty()) model = loadModel(o);
+    std::string labels = model ? "model " + model->name() + " on " + channels::kCameraFront : o.semantic_channel;
+    if (!projections.empty()) labels = projections.front().value("labels", std::string());
+    for (size_t d = 1; d < projections.size(); ++d) {
+      if (projections[d].value("labels", std::string()) != labels) {
+        throw std::runtime_error(o.traversals[d] + " was projected on other labels (" + projections[d].value("labels", std::string()) +
+                                 ") than " + o.traversals.front() + " (" + labels + ")");
+      }
+    }
+    if (o.project_only.empty()) fs::create_directories(fs::path(o.out) / "bev");
     OfflineMapper mapper(o, config, sk, osm_data.restrictions, std::move(model));
+    std::optional<DriveProjection> projection;
+    if (!o.project_only.empty()) {
+      projection.emplace(o.project_only);
+      mapper.projectInto(&*projection);
+    }
     nlohmann::json log_read = {{"events", 0}, {"bytes", 0}, {"bytes_skipped", 0}, {"bytes_unread", 0}};
     bool damaged = false;
     nlohmann::json drives = nlohmann::json::array();
+    int64_t undecodable = 0;
+    // --traversals: the drives projected before, fused in the order given.
+    for (size_t d = 0; d < projections.size(); ++d) {
+      const nlohmann::json& m = projections[d];
+      if (d > 0) mapper.startDrive();
+      mapper.mapProjection(o.traversals[d], m);
+      for (const char* k : {"events", "bytes", "bytes_skipped", "bytes_unread"}) {
+        log_read[k] = log_read[k].get<int64_t>() + m.at("log_read").value(k, int64_t{0});
+      }
+      undecodable += m.at("log_read").value("messages_undecodable", int64_t{0});
+      damaged = damaged || m.at("log_read").value("damaged", false);
+      drives.push_back({{"log", m.value("log", std::string())}, {"merged", mapper.endDrive()}});
+    }
     for (size_t d = 0; d < o.logs.size(); ++d) {
       const std::string& path = o.logs[d];
       LogReader log(path);  // a damaged log: what is readable is mapped, and said (summary.json "log_read")
@@ -522,9 +666,23 @@ int main(int argc, char** argv) {
       log_read["bytes"] = log_read["bytes"].get<int64_t>() + log.fileSize();
       log_read["bytes_skipped"] = log_read["bytes_skipped"].get<int64_t>() + log.bytesSkipped();
       log_read["bytes_unread"] = log_read["bytes_unread"].get<int64_t>() + log.bytesUnread();
+      if (projection) {  // --project-only: the drive's figures beside its traversals, and done
+        nlohmann::json figures = mapper.driveFrames();
+        figures["frames_segmented"] = mapper.framesSegmented();
+        figures["frames_failed"] = mapper.framesFailed();
+        figures["labels"] = labels;
+        figures["log"] = path;
+        figures["osm"] = fs::absolute(o.osm).string();
+        figures["log_read"] = log_read;
+        figures["log_read"]["messages_undecodable"] = g_undecodable;
+        figures["log_read"]["damaged"] = damaged;
+        projection->finish(figures);
+        std::printf("lanemap-offline: projected %s into %s\n", path.c_str(), o.project_only.c_str());
+        return 0;
+      }
       drives.push_back({{"log", path}, {"merged", mapper.endDrive()}});
     }
-    log_read["messages_undecodable"] = g_undecodable;
+    log_read["messages_undecodable"] = g_undecodable + undecodable;
     log_read["damaged"] = damaged;
     std::vector<std::string> junction_failures;
     map::LaneMap map = mapper.assembler().map(&junction_failures);
@@ -533,7 +691,8 @@ int main(int argc, char** argv) {
     lanes::addCrosswalks(map, mapper.crosswalks());  // the crossings the BEV saw, both directions merged
     for (const auto& f : junction_failures) std::fprintf(stderr, "lanemap-offline: %s failed, the rest is mapped\n", f.c_str());
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    nlohmann::json summary = {{"log", o.logs.front()}, {"labels", labels}, {"roads_mapped", mapper.roadsMapped()},
+    const std::string first_log = o.logs.empty() ? projections.front().value("log", std::string()) : o.logs.front();
+    nlohmann::json summary = {{"log", first_log}, {"labels", labels}, {"roads_mapped", mapper.roadsMapped()},
                               {"roads_failed", mapper.roadsFailed()}, {"roads", mapper.roadLog()},
                               {"partial_not_mapped", mapper.partialNotMapped()},
                               {"intersections_failed", junction_failures},
@@ -546,7 +705,7 @@ int main(int argc, char** argv) {
                               {"frames_mesh", mapper.framesMesh()}, {"frames_segmented", mapper.framesSegmented()},
                               {"frames_failed", mapper.framesFailed()}, {"seconds", secs},
                               {"log_read", log_read}};
-    if (o.logs.size() > 1) summary["drives"] = drives;  // per drive: each road merged onto earlier drives, its alignment
+    if (o.logs.size() + o.traversals.size() > 1) summary["drives"] = drives;  // per drive: each road merged onto earlier drives, its alignment
     io::writeFileAtomically((fs::path(o.out) / "summary.json").string(), summary.dump(2) + "\n");
     if (map.lanelets.empty()) {
       throw std::runtime_error(mapper.roadsFailed() > 0 ? "no road was mapped: every road explored failed (see summary.json)"

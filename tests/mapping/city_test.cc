@@ -1,0 +1,170 @@
+// lanemap-city (issue 14): drives projected apart (several at once, or by Slurm's array tasks) and
+// fused in the store's order give the map `lanemap-offline --log A --log B --log C` makes of them,
+// byte for byte; a later run projects only its new drives; bad input gets a clear error and leaves
+// the store as it was.
+#include "tests/common/read_file.h"
+#include "tests/common/sim_drive.h"
+#include "tests/common/temp_dir.h"
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace lt = lanemap::testing;
+namespace fs = std::filesystem;
+using lanemap::testing::readFile;
+
+namespace {
+
+nlohmann::json readJson(const std::string& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+// Three 20 s drives of one West Oakland world: 1, 2 along drive 1's route (it closes drive 1's
+// roads again: aligned merges), 3 a route of its own. Made once for the tests of this file.
+class City : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    tmp_ = new lt::TempDir("city");
+    const std::string sim = lt::binPath("lanemap-sim") + " -q --osm " + lt::dataPath("osm/west-oakland.osm") +
+                            " --world-seed 11 --duration 20 --no-lidar --camera-hz 5 ";
+    auto r = lt::runCommand(sim + "--seed 1 --out " + tmp_->str("d1"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const auto s1 = readJson(tmp_->str("d1/scenario.json"));
+    std::string route;
+    for (const auto& road : s1["route"]) route += std::to_string(road["from"].get<int64_t>()) + ",";
+    route += std::to_string(s1["route"].back()["to"].get<int64_t>());
+    r = lt::runCommand(sim + "--seed 2 --route " + route + " --out " + tmp_->str("d2"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = lt::runCommand(sim + "--seed 3 --out " + tmp_->str("d3"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    // The reference: the three drives mapped in one lanemap-offline run.
+    r = lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --no-lidar --osm " + osm() + " --log " + log(1) + " --log " +
+                       log(2) + " --log " + log(3) + " --out " + tmp_->str("sequential"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  static void TearDownTestSuite() {
+    delete tmp_;
+    tmp_ = nullptr;
+  }
+  static std::string osm() { return tmp_->str("d1/roads.osm"); }
+  static std::string log(int i) { return tmp_->str("d" + std::to_string(i) + "/drive.lcmlog"); }
+  static std::string city(const std::string& store) {
+    return lt::binPath("lanemap-city") + " --oracle --no-lidar --osm " + osm() + " --store " + tmp_->str(store);
+  }
+  static void expectSequentialMap(const std::string& map_dir) {
+    for (const char* f : {"map.osm", "map.geojson", "map.png"}) {
+      EXPECT_EQ(readFile(map_dir + "/" + f), readFile(tmp_->str("sequential/") + f)) << f << " differs from the sequential run's";
+    }
+    auto a = readJson(map_dir + "/summary.json"), b = readJson(tmp_->str("sequential/summary.json"));
+    a.erase("seconds");
+    b.erase("seconds");
+    EXPECT_EQ(a, b);
+  }
+  static lt::TempDir* tmp_;
+};
+lt::TempDir* City::tmp_ = nullptr;
+
+}  // namespace
+
+TEST_F(City, DrivesProjectedOnTwoCoresFuseIntoTheMapOfOneSequentialRun) {
+  const auto seq = readJson(tmp_->str("sequential/summary.json"));
+  ASSERT_EQ(seq["drives"].size(), 3u);
+  ASSERT_FALSE(seq["drives"][1]["merged"].empty()) << "drive 2 merged nothing onto drive 1: the test shows no fusion";
+  const auto r = lt::runCommand(city("two-cores") + " --jobs 2 " + log(1) + " " + log(2) + " " + log(3));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("3 drives projected"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("on 2 jobs"), std::string::npos) << r.output;
+  for (const char* slot : {"0000", "0001", "0002"}) {
+    EXPECT_TRUE(fs::exists(tmp_->str("two-cores/projections/") + slot + "/projection.json")) << slot;
+  }
+  expectSequentialMap(tmp_->str("two-cores/map"));
+}
+
+TEST_F(City, ALaterRunProjectsOnlyItsNewDrivesAndFusesThemAll) {
+  auto r = lt::runCommand(city("later") + " " + log(1) + " " + log(2));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::file_time_type first = fs::last_write_time(tmp_->str("later/projections/0000/projection.json"));
+  r = lt::runCommand(city("later") + " " + log(2) + " " + log(3));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(log(2) + " is in the store already (0001)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("1 drive projected"), std::string::npos) << r.output;
+  EXPECT_EQ(fs::last_write_time(tmp_->str("later/projections/0000/projection.json")), first);  // not projected again
+  EXPECT_TRUE(fs::exists(tmp_->str("later/projections/0002/projection.json")));
+  expectSequentialMap(tmp_->str("later/map"));
+}
+
+// The Slurm jobs lanemap-city writes, run as Slurm would run them (each array task with its
+// SLURM_ARRAY_TASK_ID, then the fusion): the same map. (No Slurm cluster here: the scheduler is
+// not in the test, the job scripts are.)
+TEST_F(City, TheSlurmJobScriptsRunTaskByTaskGiveTheSameMap) {
+  auto r = lt::runCommand(city("slurm") + " --slurm --slurm-dry-run " + log(1) + " " + log(2) + " " + log(3));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string project = readFile(tmp_->str("slurm/slurm/project.sbatch"));
+  EXPECT_NE(project.find("#SBATCH --array=0-2\n"), std::string::npos) << project;
+  EXPECT_FALSE(fs::exists(tmp_->str("slurm/map")));  // nothing run
+  for (int task : {2, 0, 1}) {  // array tasks run in any order
+    r = lt::runCommand("SLURM_ARRAY_TASK_ID=" + std::to_string(task) + " bash " + tmp_->str("slurm/slurm/project.sbatch"));
+    ASSERT_EQ(r.exit_code, 0) << "task " << task << ": " << r.output;
+  }
+  r = lt::runCommand("SLURM_ARRAY_TASK_ID=3 bash " + tmp_->str("slurm/slurm/project.sbatch"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;  // no such task
+  r = lt::runCommand("bash " + tmp_->str("slurm/slurm/fuse.sbatch"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  expectSequentialMap(tmp_->str("slurm/map"));
+}
+
+TEST_F(City, BadInputGetsAClearErrorAndLeavesTheStoreAsItWas) {
+  auto r = lt::runCommand(city("bad") + " " + log(1));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string map_before = readFile(tmp_->str("bad/map/map.osm"));
+  ASSERT_FALSE(map_before.empty());
+
+  // A second run while one holds the store.
+  {
+    const int fd = ::open(tmp_->str("bad/.lock").c_str(), O_RDWR);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(flock(fd, LOCK_EX | LOCK_NB), 0);
+    ASSERT_EQ(ftruncate(fd, 0), 0);
+    ASSERT_EQ(pwrite(fd, "4242", 4, 0), 4);
+    r = lt::runCommand(city("bad") + " " + log(2));
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("is in use by another lanemap-city (pid 4242)"), std::string::npos) << r.output;
+    ::close(fd);
+  }
+  EXPECT_FALSE(fs::exists(tmp_->str("bad/projections/0001")));
+
+  // Not a log: its projection fails, is not added, the others are; the map is made of those.
+  std::ofstream(tmp_->str("not-a-log.lcmlog")) << "this is not an LCM log\n";
+  r = lt::runCommand(city("bad") + " " + tmp_->str("not-a-log.lcmlog"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("could not be projected"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("not an LCM log"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(tmp_->str("bad/projections/0001")));
+  EXPECT_EQ(readFile(tmp_->str("bad/map/map.osm")), map_before);
+
+  // A projection of another format (an older lanemap): named, and the map stays.
+  fs::copy(tmp_->str("bad/projections/0000"), tmp_->str("bad/projections/0005"));
+  auto m = readJson(tmp_->str("bad/projections/0005/projection.json"));
+  m["lanemap_projection"] = 0;
+  std::ofstream(tmp_->str("bad/projections/0005/projection.json")) << m.dump();
+  r = lt::runCommand(city("bad"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("projection format 0, this lanemap reads 1: project the drive again"), std::string::npos) << r.output;
+  EXPECT_EQ(readFile(tmp_->str("bad/map/map.osm")), map_before);
+  EXPECT_FALSE(fs::exists(tmp_->str("bad/map.partial")));
+
+  // No drive and an empty store; a drive that does not exist.
+  r = lt::runCommand(city("empty"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("no drive"), std::string::npos) << r.output;
+  r = lt::runCommand(city("empty") + " " + tmp_->str("nowhere/drive.lcmlog"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("no such drive log"), std::string::npos) << r.output;
+}

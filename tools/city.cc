@@ -1,0 +1,338 @@
+// lanemap-city: many drives into one map store, on every core of the machine or on a Slurm cluster.
+//
+//   lanemap-city --store S --osm city.osm [--jobs N] [--oracle | --semantic-channel C | --model M]
+//                [--no-lidar] [--no-align] DRIVE.lcmlog...
+//   lanemap-city --store S --osm city.osm --slurm [--slurm-dry-run] DRIVE.lcmlog...
+//
+// Two stages over lanemap-offline, so a city's map is the map `lanemap-offline --log A --log B ...`
+// makes of the same drives in the same order, byte for byte (tested):
+//   1. projection, one drive a job, N at once: `lanemap-offline --log D --project-only` segments
+//      the drive's frames, projects them and keeps what its BEV builder hands over per road
+//      (S/projections/NNNN: grids and projection.json). Most of the time goes here.
+//   2. fusion, once: `lanemap-offline --traversals S/projections/0000 ... --out S/map`: every
+//      drive's traversals in the store's order, aligned onto the roads' evidence, explored, the
+//      junctions built, the map written (S/map: map.osm, map.geojson, map.png, summary.json).
+// The store keeps every drive's projection: a later run with new drives projects only those, then
+// fuses all of them again (fusion is the cheap stage). A drive already in the store (the same log
+// path and size) is not projected twice. One run at a time: a second one on the same store stops
+// with an error naming the first (S/.lock). Each projection is written into NNNN.partial and renamed
+// when whole; the map into map.partial and swapped in: an interrupted run leaves the store as it
+// was before it, plus the projections that finished.
+//
+// --slurm writes S/slurm/project.sbatch (an array job, one task per new drive) and fuse.sbatch
+// (one task, after the array has succeeded: --dependency=afterok) and submits them with sbatch;
+// the store must be on a filesystem every node sees. --slurm-dry-run writes them without submitting.
+#include "processes/framework/share_dir.h"
+
+#include <CLI/CLI.hpp>
+#include <fcntl.h>
+#include <nlohmann/json.hpp>
+#include <spawn.h>
+#include <sys/file.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+struct Options {
+  std::string store, osm, semantic_channel, model;
+  std::vector<std::string> drives;
+  int jobs = 0;  // 0: every core
+  bool oracle = false, no_lidar = false, no_align = false, slurm = false, slurm_dry_run = false;
+};
+
+// The store's folder of projections: NNNN (whole) in the order the drives were added.
+std::vector<fs::path> projections(const fs::path& store) {
+  std::vector<fs::path> out;
+  const fs::path dir = store / "projections";
+  if (!fs::is_directory(dir)) return out;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (e.is_directory() && name.size() == 4 && name.find_first_not_of("0123456789") == std::string::npos) out.push_back(e.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::string slot(size_t index) {
+  char buf[16];
+  std::snprintf(buf, sizeof(buf), "%04zu", index);
+  return buf;
+}
+
+nlohmann::json manifest(const fs::path& projection) {
+  std::ifstream in(projection / "projection.json");
+  nlohmann::json m = nlohmann::json::parse(in, nullptr, false);
+  return m.is_discarded() ? nlohmann::json::object() : m;
+}
+
+// The label options, as lanemap-offline takes them (both stages get the same).
+std::vector<std::string> labelArgs(const Options& o) {
+  std::vector<std::string> a;
+  if (o.oracle) a.push_back("--oracle");
+  if (!o.semantic_channel.empty()) a.insert(a.end(), {"--semantic-channel", o.semantic_channel});
+  if (!o.model.empty()) a.insert(a.end(), {"--model", o.model});
+  if (o.no_lidar) a.push_back("--no-lidar");
+  return a;
+}
+
+// Starts argv with stdout and stderr to `log`; the pid (-1: could not start).
+pid_t start(const std::vector<std::string>& args, const std::string& log) {
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  return rc == 0 ? pid : -1;
+}
+
+int exitCode(int status) { return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status); }
+
+std::string tail(const std::string& path, size_t bytes = 1500) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string s = ss.str();
+  return s.size() > bytes ? "..." + s.substr(s.size() - bytes) : s;
+}
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+std::string join(const std::vector<std::string>& args) {
+  std::string s;
+  for (const auto& a : args) s += (s.empty() ? "" : " ") + quote(a);
+  return s;
+}
+
+// Holds S/.lock (flock) for the run: a second run on the store stops with the first one's pid.
+class StoreLock {
+ public:
+  explicit StoreLock(const fs::path& store) {
+    const std::string path = (store / ".lock").string();
+    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT, 0644);
+    if (fd_ < 0) throw std::runtime_error("cannot open " + path);
+    if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      char buf[32] = {0};
+      const ssize_t n = pread(fd_, buf, sizeof(buf) - 1, 0);
+      ::close(fd_);
+      throw std::runtime_error("the store " + store.string() + " is in use by another lanemap-city (pid " +
+                               (n > 0 ? std::string(buf, static_cast<size_t>(n)) : std::string("?")) + "); wait for it to end");
+    }
+    const std::string pid = std::to_string(getpid());
+    if (ftruncate(fd_, 0) != 0 || pwrite(fd_, pid.data(), pid.size(), 0) < 0) {
+      // the pid is only a courtesy to whoever is refused
+    }
+  }
+  ~StoreLock() { ::close(fd_); }  // releases the lock
+
+ private:
+  int fd_ = -1;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  CLI::App app{"lanemap-city: many drives into one map store, on every core or on a Slurm cluster. Each new drive is\n"
+               "projected once (lanemap-offline --project-only, N at once), then every drive of the store is fused\n"
+               "into one map (lanemap-offline --traversals, the store's order): the map --log A --log B ... makes."};
+  app.add_option("--store", o.store, "the map store (a folder, created): projections/, map/ (map.osm, map.geojson, ...)")->required();
+  app.add_option("--osm", o.osm, "road-level OSM file of the city (.osm or .osm.pbf)")->required()->check(CLI::ExistingFile);
+  app.add_option("drives", o.drives, "drive logs (drive.lcmlog), added to the store in this order");
+  app.add_option("-j,--jobs", o.jobs, "drives projected at once (default: every core)")->check(CLI::NonNegativeNumber);
+  auto* oracle = app.add_flag("--oracle", o.oracle, "map on the simulator's truth labels (as lanemap-offline)");
+  app.add_option("--semantic-channel", o.semantic_channel, "map on the labels of this channel of the logs")->excludes(oracle);
+  app.add_option("--model", o.model, "ONNX model, instead of config/segmenter.yaml's");
+  app.add_flag("--no-lidar", o.no_lidar, "project on the flat plane only");
+  app.add_flag("--no-align", o.no_align, "fuse later drives unaligned (to see what alignment removes)");
+  app.add_flag("--slurm", o.slurm, "write the jobs for Slurm (S/slurm/*.sbatch) and submit them with sbatch");
+  app.add_flag("--slurm-dry-run", o.slurm_dry_run, "with --slurm: write the job scripts, do not submit");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    const auto t0 = Clock::now();
+    const fs::path store = fs::absolute(o.store);
+    fs::create_directories(store / "projections");
+    StoreLock lock(store);
+    const fs::path offline = lanemap::executableDir() / "lanemap-offline";
+    const fs::path self = lanemap::executableDir() / "lanemap-city";
+    const std::string osm = fs::absolute(o.osm).string();
+
+    // The drives not in the store yet (by absolute path and size), each with its new slot.
+    std::vector<fs::path> have = projections(store);
+    std::map<std::pair<std::string, int64_t>, fs::path> known;
+    for (const auto& p : have) {
+      const auto m = manifest(p);
+      if (m.contains("log")) known[{m["log"].get<std::string>(), m["log_read"].value("bytes", int64_t{0})}] = p;
+    }
+    std::vector<std::pair<std::string, fs::path>> todo;  // log, its projection folder
+    // New slots after the last one (a drive that failed to project leaves its number unused).
+    const size_t first_slot = have.empty() ? 0 : std::stoul(have.back().filename().string()) + 1;
+    for (const auto& d : o.drives) {
+      const fs::path log = fs::absolute(fs::is_directory(d) ? fs::path(d) / "drive.lcmlog" : fs::path(d));
+      if (!fs::is_regular_file(log)) throw std::runtime_error("no such drive log: " + log.string());
+      const auto key = std::make_pair(log.string(), static_cast<int64_t>(fs::file_size(log)));
+      if (known.count(key)) {
+        std::printf("lanemap-city: %s is in the store already (%s)\n", log.c_str(), known[key].filename().c_str());
+        continue;
+      }
+      known[key] = store / "projections" / slot(first_slot + todo.size());
+      todo.emplace_back(log.string(), known[key]);
+    }
+    if (have.empty() && todo.empty()) throw std::runtime_error("no drive: give drive logs (the store has none yet)");
+    const auto labels = labelArgs(o);
+    auto projectArgs = [&](const std::string& log, const std::string& folder) {
+      std::vector<std::string> a{offline.string(), "-q", "--osm", osm, "--log", log, "--project-only", folder};
+      a.insert(a.end(), labels.begin(), labels.end());
+      return a;
+    };
+    auto fuseArgs = [&](const std::vector<fs::path>& all, const std::string& out) {
+      std::vector<std::string> a{offline.string(), "-q", "--osm", osm, "--out", out};
+      for (const auto& p : all) a.insert(a.end(), {"--traversals", p.string()});
+      a.insert(a.end(), labels.begin(), labels.end());
+      if (o.no_align) a.push_back("--no-align");
+      return a;
+    };
+
+    if (o.slurm) {
+      // One array task per new drive (project into NNNN.partial, rename when whole), then the
+      // fusion, which waits for the whole array to succeed (afterok).
+      const fs::path dir = store / "slurm";
+      fs::create_directories(dir);
+      std::ofstream p(dir / "project.sbatch");
+      p << "#!/bin/bash\n#SBATCH --job-name=lanemap-project\n#SBATCH --output=" << (dir / "project-%a.log").string() << "\n"
+        << "#SBATCH --cpus-per-task=2\n";
+      if (!todo.empty()) p << "#SBATCH --array=0-" << todo.size() - 1 << "\n";
+      p << "set -euo pipefail\ncase \"$SLURM_ARRAY_TASK_ID\" in\n";
+      for (size_t i = 0; i < todo.size(); ++i) {
+        const std::string folder = todo[i].second.string();
+        p << "  " << i << ") rm -rf " << quote(folder + ".partial") << " && " << join(projectArgs(todo[i].first, folder + ".partial"))
+          << " && mv " << quote(folder + ".partial") << " " << quote(folder) << " ;;\n";
+      }
+      p << "  *) echo \"no drive for task $SLURM_ARRAY_TASK_ID\" >&2; exit 2 ;;\nesac\n";
+      p.close();
+      std::ofstream f(dir / "fuse.sbatch");
+      f << "#!/bin/bash\n#SBATCH --job-name=lanemap-fuse\n#SBATCH --output=" << (dir / "fuse.log").string() << "\n"
+        << "#SBATCH --cpus-per-task=2\nset -euo pipefail\n"
+        << join({self.string(), "--store", store.string(), "--osm", osm}) << (labels.empty() ? "" : " " + join(labels))
+        << (o.no_align ? " --no-align" : "") << "\n";
+      f.close();
+      std::printf("lanemap-city: wrote %s (%zu drive%s) and %s\n", (dir / "project.sbatch").c_str(), todo.size(),
+                  todo.size() == 1 ? "" : "s", (dir / "fuse.sbatch").c_str());
+      if (o.slurm_dry_run) return 0;
+      std::string dependency;
+      if (!todo.empty()) {
+        FILE* pipe = popen(("sbatch --parsable " + quote((dir / "project.sbatch").string())).c_str(), "r");
+        char buf[128] = {0};
+        const bool got = pipe && std::fgets(buf, sizeof(buf), pipe);
+        const int rc = pipe ? pclose(pipe) : -1;
+        if (!got || rc != 0) throw std::runtime_error("sbatch could not submit " + (dir / "project.sbatch").string() + " (is Slurm installed and running?)");
+        std::string id = buf;
+        id = id.substr(0, id.find_first_of(";\n"));
+        dependency = "--dependency=afterok:" + id + " ";
+        std::printf("lanemap-city: projection array job %s\n", id.c_str());
+      }
+      if (std::system(("sbatch " + dependency + quote((dir / "fuse.sbatch").string())).c_str()) != 0) {
+        throw std::runtime_error("sbatch could not submit " + (dir / "fuse.sbatch").string());
+      }
+      return 0;
+    }
+
+    // 1. Projection, `jobs` drives at once.
+    const int jobs = o.jobs > 0 ? o.jobs : std::max(1u, std::thread::hardware_concurrency());
+    std::map<pid_t, size_t> running;
+    std::vector<double> seconds(todo.size(), 0.0);
+    std::vector<Clock::time_point> started(todo.size());
+    int failed = 0;
+    auto reap = [&]() {
+      int status = 0;
+      const pid_t pid = waitpid(-1, &status, 0);
+      if (pid < 0) return;
+      const size_t i = running.at(pid);
+      running.erase(pid);
+      seconds[i] = std::chrono::duration<double>(Clock::now() - started[i]).count();
+      const std::string partial = todo[i].second.string() + ".partial";
+      if (exitCode(status) == 0) {
+        fs::rename(partial + ".log", fs::path(partial) / "project.log");
+        fs::rename(partial, todo[i].second);
+        std::printf("lanemap-city: projected %s (%.1f s) -> %s\n", todo[i].first.c_str(), seconds[i], todo[i].second.filename().c_str());
+      } else {
+        ++failed;
+        std::fprintf(stderr, "lanemap-city: %s could not be projected (exit %d), not added (%s):\n%s\n", todo[i].first.c_str(),
+                     exitCode(status), (partial + ".log").c_str(), tail(partial + ".log").c_str());
+        fs::remove_all(partial);
+      }
+      std::fflush(stdout);
+    };
+    const auto p0 = Clock::now();
+    for (size_t i = 0; i < todo.size(); ++i) {
+      while (static_cast<int>(running.size()) >= jobs) reap();
+      const std::string partial = todo[i].second.string() + ".partial";
+      fs::remove_all(partial);
+      fs::create_directories(partial);
+      started[i] = Clock::now();
+      const pid_t pid = start(projectArgs(todo[i].first, partial), partial + ".log");
+      if (pid < 0) throw std::runtime_error("cannot start " + offline.string());
+      running[pid] = i;
+    }
+    while (!running.empty()) reap();
+    const double projection_wall = std::chrono::duration<double>(Clock::now() - p0).count();
+    double projection_sum = 0.0;
+    for (double s : seconds) projection_sum += s;
+    if (!todo.empty()) {
+      std::printf("lanemap-city: %zu drive%s projected in %.1f s wall on %d job%s (the drives' own times add up to %.1f s)\n",
+                  todo.size() - failed, todo.size() - failed == 1 ? "" : "s", projection_wall, jobs, jobs == 1 ? "" : "s", projection_sum);
+    }
+
+    // 2. Fusion of every drive in the store, into map.partial, swapped in when whole.
+    const std::vector<fs::path> all = projections(store);
+    if (all.empty()) throw std::runtime_error("no drive of the store could be projected");
+    const fs::path map_dir = store / "map", partial = store / "map.partial", old = store / "map.old";
+    fs::remove_all(partial);
+    const auto f0 = Clock::now();
+    const pid_t pid = start(fuseArgs(all, partial.string()), (store / "fuse.log").string());
+    int status = 0;
+    if (pid < 0 || waitpid(pid, &status, 0) < 0 || exitCode(status) != 0) {
+      fs::remove_all(partial);
+      throw std::runtime_error("the fusion failed (the map of the store is as it was):\n" + tail((store / "fuse.log").string()));
+    }
+    fs::remove_all(old);
+    if (fs::exists(map_dir)) fs::rename(map_dir, old);
+    fs::rename(partial, map_dir);
+    fs::remove_all(old);
+    std::printf("lanemap-city: %zu drive%s fused in %.1f s into %s (map.osm, map.geojson, map.png, summary.json); %.1f s in all\n",
+                all.size(), all.size() == 1 ? "" : "s", std::chrono::duration<double>(Clock::now() - f0).count(), map_dir.c_str(),
+                std::chrono::duration<double>(Clock::now() - t0).count());
+    return failed > 0 ? 1 : 0;
+  } catch (const std::exception& e) {
+    std::cerr << "lanemap-city: " << e.what() << "\n";
+    return 2;
+  }
+}

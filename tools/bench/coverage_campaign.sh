@@ -2,8 +2,8 @@
 # A coverage campaign (issue 14): DRIVES simulated drives of one West Oakland world (lanemap-sim
 # --world-seed), the first on an auto route, each later one planned on what the map covers so far
 # (lanemap-coverage --json, then lanemap-sim --cover: the most unmapped directed length in its
-# SECONDS). After each drive every log so far is mapped into one map (lanemap-offline --oracle,
-# flat ground, BEV aligned) and printed: the share of the city's directed road length mapped
+# SECONDS). After each drive every log so far is mapped into one map (lanemap-city: the new drive
+# projected, all fused as lanemap-offline --oracle would map them, flat ground, BEV aligned) and printed: the share of the city's directed road length mapped
 # (lanemap-coverage) and the map's scores against the whole city's truth (lanemap-eval, not
 # --driven: a road not driven yet counts as missed).
 #
@@ -22,7 +22,6 @@ mkdir -p "$out"
 world=11
 echo "== coverage campaign: $drives drives of ${secs} s of one West Oakland world, each later one planned on the map so far"
 printf "  %-6s %-9s %9s %8s %7s %7s %9s %8s\n" DRIVES NEW_ROADS MAPPED_M SHARE LANE_P LANE_R RMS_M MIOU
-logs=()
 for k in $(seq 1 "$drives"); do
   d=$out/drive$k
   cover=()
@@ -31,9 +30,10 @@ for k in $(seq 1 "$drives"); do
     "$bin/lanemap-sim" -q --osm data/osm/west-oakland.osm --world-seed $world --seed "$k" --duration "$secs" \
       --no-lidar "${cover[@]}" --out "$d" --force > "$out/sim$k.log" 2>&1 || { echo "  drive $k: lanemap-sim failed (see $out/sim$k.log)"; break; }
   fi
-  logs+=(--log "$d/drive.lcmlog")
-  "$bin/lanemap-offline" -q --oracle --no-lidar "${logs[@]}" --osm "$out/drive1/roads.osm" --out "$out/map$k" \
-    > "$out/map$k.log" 2>&1 || echo "  drive $k: lanemap-offline failed (see $out/map$k.log)"
+  # The new drive into the campaign's store (lanemap-city: projected once, every drive fused again).
+  "$bin/lanemap-city" --store "$out/city" --osm "$out/drive1/roads.osm" --oracle --no-lidar "$d/drive.lcmlog" \
+    > "$out/map$k.log" 2>&1 || echo "  drive $k: lanemap-city failed (see $out/map$k.log)"
+  rm -rf "$out/map$k" && cp -r "$out/city/map" "$out/map$k"
   "$bin/lanemap-coverage" --store "$out/map$k" --osm "$out/drive1/roads.osm" --json "$out/coverage$k.json" \
     > "$out/coverage$k.log" 2>&1 || true
   "$bin/lanemap-eval" -q --truth "$out/drive1/groundtruth.osm" --map "$out/map$k/map.osm" --json "$out/eval$k.json" \
@@ -56,4 +56,5 @@ except (OSError, KeyError, TypeError, ValueError):
 print(f"  {k:<6} {new:>3}/{len(route):<5} {cov['mapped_m']:9.0f} {100 * cov['share']:7.1f}% {scores}")
 PY
 done
+echo "  lanemap-city, last step: $(grep -h 'fused in' "$out/map$drives.log" || echo '(no fusion)')"
 echo "  (SHARE: of the city's $(python3 -c "import json,sys; print(round(json.load(open(sys.argv[1]))['total_m']))" "$out/coverage1.json") m of directed road; the issue's target is 90 % with --plan)"

@@ -14,6 +14,7 @@ PACKAGES=(
   osmium-tool iproute2 util-linux
   chromium chromium-driver                # the viewer's browser test (tests/viewer/browser_test.cc)
   clang libclang-rt-14-dev                # fuzz/: libFuzzer with ASan + UBSan (make fuzz)
+  slurm-wlm munge                         # lanemap-city --slurm's test: a one-node cluster (tests/mapping/city_test.cc)
   libboost-filesystem-dev libboost-serialization-dev libboost-program-options-dev libpugixml-dev  # Lanelet2's checks
 )
 # npm bundles the viewer's page at build time (web/viewer); a Node.js from elsewhere (NodeSource's

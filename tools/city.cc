@@ -21,7 +21,9 @@
 //
 // --slurm writes S/slurm/project.sbatch (an array job, one task per new drive) and fuse.sbatch
 // (one task, after the array has succeeded: --dependency=afterok) and submits them with sbatch;
-// the store must be on a filesystem every node sees. --slurm-dry-run writes them without submitting.
+// the store, the logs, the OSM file and lanemap's programs must be at the same paths on every
+// node (a shared filesystem); a partition or account comes from sbatch's environment
+// (SBATCH_PARTITION, SBATCH_ACCOUNT). --slurm-dry-run writes them without submitting.
 #include "processes/framework/share_dir.h"
 
 #include <CLI/CLI.hpp>

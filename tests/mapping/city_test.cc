@@ -1,4 +1,5 @@
-// lanemap-city (issue 14): drives projected apart (several at once, or by Slurm's array tasks) and
+// lanemap-city (issue 14): drives projected apart (several at once, or by Slurm's array tasks, on a
+// one-node Slurm cluster the test brings up) and
 // fused in the store's order give the map `lanemap-offline --log A --log B --log C` makes of them,
 // byte for byte; a later run projects only its new drives; bad input gets a clear error and leaves
 // the store as it was.
@@ -118,6 +119,27 @@ TEST_F(City, TheSlurmJobScriptsRunTaskByTaskGiveTheSameMap) {
   r = lt::runCommand("bash " + tmp_->str("slurm/slurm/fuse.sbatch"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   expectSequentialMap(tmp_->str("slurm/map"));
+}
+
+// A one-node Slurm cluster on this machine (munged, slurmctld, slurmd in a private network
+// namespace: tests/mapping/slurm_cluster.sh): lanemap-city --slurm submits the array job and the
+// fusion after it; when the jobs have run, the store holds the sequential run's map.
+TEST_F(City, ASlurmClusterOnThisMachineRunsTheJobsToTheSameMap) {
+  if (geteuid() != 0) GTEST_SKIP() << "starting Slurm's daemons needs root (CI runs as root)";
+  for (const char* tool : {"munged", "slurmctld", "slurmd", "sbatch", "unshare"}) {
+    ASSERT_EQ(lt::runCommand(std::string("command -v ") + tool).exit_code, 0)
+        << tool << " is missing: scripts/install-deps.sh installs munge and slurm-wlm";
+  }
+  const auto r = lt::runCommand("unshare -n " + std::string(LANEMAP_SOURCE_DIR) + "/tests/mapping/slurm_cluster.sh " +
+                                tmp_->str("cluster") + " 240 " + city("on-slurm") + " --slurm " + log(1) + " " + log(2) + " " +
+                                log(3));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("projection array job"), std::string::npos) << r.output;
+  for (const char* task : {"0", "1", "2"}) {
+    EXPECT_TRUE(fs::exists(tmp_->str("on-slurm/slurm/project-") + task + ".log")) << "array task " << task << " did not run";
+  }
+  ASSERT_TRUE(fs::exists(tmp_->str("on-slurm/map/map.osm"))) << readFile(tmp_->str("on-slurm/slurm/fuse.log"));
+  expectSequentialMap(tmp_->str("on-slurm/map"));
 }
 
 TEST_F(City, BadInputGetsAClearErrorAndLeavesTheStoreAsItWas) {

@@ -618,6 +618,16 @@ int main(int argc, char** argv) {
                                  ") than " + o.traversals.front() + " (" + labels + ")");
       }
     }
+    // A projection's road ids are those of the OSM it was projected on: fused on another, wrong.
+    for (size_t d = 0; d < projections.size(); ++d) {
+      const auto& m = projections[d];
+      if (m.value("osm_bytes", int64_t{-1}) != static_cast<int64_t>(fs::file_size(o.osm)) ||
+          m.value("atomic_roads", size_t{0}) != sk.roads().size()) {
+        throw std::runtime_error(o.traversals[d] + " was projected on another OSM file (" + m.value("osm", std::string("?")) + ", " +
+                                 std::to_string(m.value("atomic_roads", size_t{0})) + " atomic roads) than --osm " + o.osm + " (" +
+                                 std::to_string(sk.roads().size()) + ")");
+      }
+    }
     if (o.project_only.empty()) fs::create_directories(fs::path(o.out) / "bev");
     OfflineMapper mapper(o, config, sk, osm_data.restrictions, std::move(model));
     std::optional<DriveProjection> projection;
@@ -673,6 +683,8 @@ int main(int argc, char** argv) {
         figures["labels"] = labels;
         figures["log"] = path;
         figures["osm"] = fs::absolute(o.osm).string();
+        figures["osm_bytes"] = static_cast<int64_t>(fs::file_size(o.osm));
+        figures["atomic_roads"] = sk.roads().size();
         figures["log_read"] = log_read;
         figures["log_read"]["messages_undecodable"] = g_undecodable;
         figures["log_read"]["damaged"] = damaged;

@@ -182,6 +182,14 @@ TEST_F(City, BadInputGetsAClearErrorAndLeavesTheStoreAsItWas) {
   EXPECT_EQ(readFile(tmp_->str("bad/map/map.osm")), map_before);
   EXPECT_FALSE(fs::exists(tmp_->str("bad/map.partial")));
 
+  // The store's drives fused on another city's OSM: named, and the map stays.
+  fs::remove_all(tmp_->str("bad/projections/0005"));
+  r = lt::runCommand(lt::binPath("lanemap-city") + " --oracle --no-lidar --osm " + lt::dataPath("osm/monaco.osm.pbf") +
+                     " --store " + tmp_->str("bad"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("was projected on another OSM file"), std::string::npos) << r.output;
+  EXPECT_EQ(readFile(tmp_->str("bad/map/map.osm")), map_before);
+
   // No drive and an empty store; a drive that does not exist.
   r = lt::runCommand(city("empty"));
   EXPECT_EQ(r.exit_code, 2) << r.output;

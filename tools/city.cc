@@ -167,15 +167,15 @@ int main(int argc, char** argv) {
                "into one map (lanemap-offline --traversals, the store's order): the map --log A --log B ... makes."};
   app.add_option("--store", o.store, "the map store (a folder, created): projections/, map/ (map.osm, map.geojson, ...)")->required();
   app.add_option("--osm", o.osm, "road-level OSM file of the city (.osm or .osm.pbf)")->required()->check(CLI::ExistingFile);
-  app.add_option("drives", o.drives, "drive logs (drive.lcmlog), added to the store in this order");
+  app.add_option("drives", o.drives, "drive logs (drive.lcmlog, or a folder holding one), added to the store in this order");
   app.add_option("-j,--jobs", o.jobs, "drives projected at once (default: every core)")->check(CLI::NonNegativeNumber);
   auto* oracle = app.add_flag("--oracle", o.oracle, "map on the simulator's truth labels (as lanemap-offline)");
   app.add_option("--semantic-channel", o.semantic_channel, "map on the labels of this channel of the logs")->excludes(oracle);
   app.add_option("--model", o.model, "ONNX model, instead of config/segmenter.yaml's");
   app.add_flag("--no-lidar", o.no_lidar, "project on the flat plane only");
   app.add_flag("--no-align", o.no_align, "fuse later drives unaligned (to see what alignment removes)");
-  app.add_flag("--slurm", o.slurm, "write the jobs for Slurm (S/slurm/*.sbatch) and submit them with sbatch");
-  app.add_flag("--slurm-dry-run", o.slurm_dry_run, "with --slurm: write the job scripts, do not submit");
+  auto* slurm = app.add_flag("--slurm", o.slurm, "write the jobs for Slurm (S/slurm/*.sbatch) and submit them with sbatch");
+  app.add_flag("--slurm-dry-run", o.slurm_dry_run, "with --slurm: write the job scripts, do not submit")->needs(slurm);
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -186,6 +186,7 @@ int main(int argc, char** argv) {
     const fs::path offline = lanemap::executableDir() / "lanemap-offline";
     const fs::path self = lanemap::executableDir() / "lanemap-city";
     const std::string osm = fs::absolute(o.osm).string();
+    if (!o.model.empty() && fs::exists(o.model)) o.model = fs::absolute(o.model).string();  // jobs may run elsewhere
 
     // The drives not in the store yet (by absolute path and size), each with its new slot.
     std::vector<fs::path> have = projections(store);

@@ -28,34 +28,31 @@ nlohmann::json readJson(const std::string& path) {
 }
 
 // Three 20 s drives of one West Oakland world: 1, 2 along drive 1's route (it closes drive 1's
-// roads again: aligned merges), 3 a route of its own. Made once for the tests of this file.
+// roads again: aligned merges), 3 a route of its own. Made once for every test process
+// (sharedSimDrive), the sequential run's map once for each.
 class City : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     tmp_ = new lt::TempDir("city");
-    const std::string sim = lt::binPath("lanemap-sim") + " -q --osm " + lt::dataPath("osm/west-oakland.osm") +
-                            " --world-seed 11 --duration 20 --no-lidar --camera-hz 5 ";
-    auto r = lt::runCommand(sim + "--seed 1 --out " + tmp_->str("d1"));
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-    const auto s1 = readJson(tmp_->str("d1/scenario.json"));
+    const std::string world = "--world-seed 11 --no-lidar --camera-hz 5";
+    drives_[1] = lt::sharedSimDrive("osm/west-oakland.osm", 20, 1, world);
+    const auto s1 = readJson(drives_[1] + "/scenario.json");
     std::string route;
     for (const auto& road : s1["route"]) route += std::to_string(road["from"].get<int64_t>()) + ",";
     route += std::to_string(s1["route"].back()["to"].get<int64_t>());
-    r = lt::runCommand(sim + "--seed 2 --route " + route + " --out " + tmp_->str("d2"));
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-    r = lt::runCommand(sim + "--seed 3 --out " + tmp_->str("d3"));
-    ASSERT_EQ(r.exit_code, 0) << r.output;
+    drives_[2] = lt::sharedSimDrive("osm/west-oakland.osm", 20, 2, world + " --route " + route);
+    drives_[3] = lt::sharedSimDrive("osm/west-oakland.osm", 20, 3, world);
     // The reference: the three drives mapped in one lanemap-offline run.
-    r = lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --no-lidar --osm " + osm() + " --log " + log(1) + " --log " +
-                       log(2) + " --log " + log(3) + " --out " + tmp_->str("sequential"));
+    const auto r = lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --no-lidar --osm " + osm() + " --log " + log(1) +
+                                  " --log " + log(2) + " --log " + log(3) + " --out " + tmp_->str("sequential"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
   static void TearDownTestSuite() {
     delete tmp_;
     tmp_ = nullptr;
   }
-  static std::string osm() { return tmp_->str("d1/roads.osm"); }
-  static std::string log(int i) { return tmp_->str("d" + std::to_string(i) + "/drive.lcmlog"); }
+  static std::string osm() { return drives_[1] + "/roads.osm"; }
+  static std::string log(int i) { return drives_[i] + "/drive.lcmlog"; }
   static std::string city(const std::string& store) {
     return lt::binPath("lanemap-city") + " --oracle --no-lidar --osm " + osm() + " --store " + tmp_->str(store);
   }
@@ -69,8 +66,10 @@ class City : public ::testing::Test {
     EXPECT_EQ(a, b);
   }
   static lt::TempDir* tmp_;
+  static std::string drives_[4];
 };
 lt::TempDir* City::tmp_ = nullptr;
+std::string City::drives_[4];
 
 }  // namespace
 

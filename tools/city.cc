@@ -74,6 +74,20 @@ std::vector<fs::path> projections(const fs::path& store) {
   return out;
 }
 
+// The next free slot number: after every NNNN and NNNN.partial there (a drive that failed to
+// project leaves its number unused; a Slurm task still projecting holds its NNNN.partial).
+size_t nextSlot(const fs::path& store) {
+  size_t next = 0;
+  for (const auto& e : fs::directory_iterator(store / "projections")) {
+    std::string name = e.path().filename().string();
+    if (name.size() == 12 && name.compare(4, 8, ".partial") == 0) name.resize(4);
+    if (e.is_directory() && name.size() == 4 && name.find_first_not_of("0123456789") == std::string::npos) {
+      next = std::max(next, std::stoul(name) + 1);
+    }
+  }
+  return next;
+}
+
 std::string slot(size_t index) {
   char buf[16];
   std::snprintf(buf, sizeof(buf), "%04zu", index);
@@ -196,8 +210,7 @@ int main(int argc, char** argv) {
       if (m.contains("log")) known[{m["log"].get<std::string>(), m["log_read"].value("bytes", int64_t{0})}] = p;
     }
     std::vector<std::pair<std::string, fs::path>> todo;  // log, its projection folder
-    // New slots after the last one (a drive that failed to project leaves its number unused).
-    const size_t first_slot = have.empty() ? 0 : std::stoul(have.back().filename().string()) + 1;
+    const size_t first_slot = nextSlot(store);
     for (const auto& d : o.drives) {
       const fs::path log = fs::absolute(fs::is_directory(d) ? fs::path(d) / "drive.lcmlog" : fs::path(d));
       if (!fs::is_regular_file(log)) throw std::runtime_error("no such drive log: " + log.string());
@@ -236,6 +249,7 @@ int main(int argc, char** argv) {
       p << "set -euo pipefail\ncase \"$SLURM_ARRAY_TASK_ID\" in\n";
       for (size_t i = 0; i < todo.size(); ++i) {
         const std::string folder = todo[i].second.string();
+        fs::create_directories(folder + ".partial");  // holds the slot until the task has run
         p << "  " << i << ") rm -rf " << quote(folder + ".partial") << " && " << join(projectArgs(todo[i].first, folder + ".partial"))
           << " && mv " << quote(folder + ".partial") << " " << quote(folder) << " ;;\n";
       }

@@ -25,11 +25,11 @@
 // node (a shared filesystem); a partition or account comes from sbatch's environment
 // (SBATCH_PARTITION, SBATCH_ACCOUNT). --slurm-dry-run writes them without submitting.
 #include "processes/framework/share_dir.h"
+#include "processes/framework/spawn_logged.h"
 
 #include <CLI/CLI.hpp>
 #include <fcntl.h>
 #include <nlohmann/json.hpp>
-#include <spawn.h>
 #include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -46,8 +46,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-extern char** environ;
 
 namespace {
 
@@ -109,23 +107,6 @@ std::vector<std::string> labelArgs(const Options& o) {
   if (o.no_lidar) a.push_back("--no-lidar");
   return a;
 }
-
-// Starts argv with stdout and stderr to `log`; the pid (-1: could not start).
-pid_t start(const std::vector<std::string>& args, const std::string& log) {
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  return rc == 0 ? pid : -1;
-}
-
-int exitCode(int status) { return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status); }
 
 std::string tail(const std::string& path, size_t bytes = 1500) {
   std::ifstream in(path, std::ios::binary);
@@ -296,14 +277,14 @@ int main(int argc, char** argv) {
       running.erase(pid);
       seconds[i] = std::chrono::duration<double>(Clock::now() - started[i]).count();
       const std::string partial = todo[i].second.string() + ".partial";
-      if (exitCode(status) == 0) {
+      if (lanemap::exitCode(status) == 0) {
         fs::rename(partial + ".log", fs::path(partial) / "project.log");
         fs::rename(partial, todo[i].second);
         std::printf("lanemap-city: projected %s (%.1f s) -> %s\n", todo[i].first.c_str(), seconds[i], todo[i].second.filename().c_str());
       } else {
         ++failed;
         std::fprintf(stderr, "lanemap-city: %s could not be projected (exit %d), not added (%s):\n%s\n", todo[i].first.c_str(),
-                     exitCode(status), (partial + ".log").c_str(), tail(partial + ".log").c_str());
+                     lanemap::exitCode(status), (partial + ".log").c_str(), tail(partial + ".log").c_str());
         fs::remove_all(partial);
       }
       std::fflush(stdout);
@@ -315,7 +296,7 @@ int main(int argc, char** argv) {
       fs::remove_all(partial);
       fs::create_directories(partial);
       started[i] = Clock::now();
-      const pid_t pid = start(projectArgs(todo[i].first, partial), partial + ".log");
+      const pid_t pid = lanemap::spawnLogged(projectArgs(todo[i].first, partial), partial + ".log");
       if (pid < 0) throw std::runtime_error("cannot start " + offline.string());
       running[pid] = i;
     }
@@ -334,9 +315,9 @@ int main(int argc, char** argv) {
     const fs::path map_dir = store / "map", partial = store / "map.partial", old = store / "map.old";
     fs::remove_all(partial);
     const auto f0 = Clock::now();
-    const pid_t pid = start(fuseArgs(all, partial.string()), (store / "fuse.log").string());
+    const pid_t pid = lanemap::spawnLogged(fuseArgs(all, partial.string()), (store / "fuse.log").string());
     int status = 0;
-    if (pid < 0 || waitpid(pid, &status, 0) < 0 || exitCode(status) != 0) {
+    if (pid < 0 || waitpid(pid, &status, 0) < 0 || lanemap::exitCode(status) != 0) {
       fs::remove_all(partial);
       throw std::runtime_error("the fusion failed (the map of the store is as it was):\n" + tail((store / "fuse.log").string()));
     }

@@ -14,11 +14,9 @@
 // publishes is recorded). output_file: JSON lines the command writes besides (the viewer's state).
 #include "processes/framework/log_reader.h"
 #include "processes/framework/message_json.h"
+#include "processes/framework/spawn_logged.h"
 
 #include <CLI/CLI.hpp>
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
@@ -34,8 +32,6 @@
 #include <string>
 #include <vector>
 
-extern char** environ;
-
 namespace {
 
 namespace fs = std::filesystem;
@@ -48,25 +44,12 @@ std::string expand(std::string s, const std::map<std::string, std::string>& vars
   return s;
 }
 
-// Runs argv with stdout and stderr to `log`, in `dir`; the exit status (-1: could not start).
+// Runs args with stdout and stderr to `log`, in `dir`; the exit status (-1: could not start).
 int run(const std::vector<std::string>& args, const std::string& log, const std::string& dir) {
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  const fs::path cwd = fs::current_path();
-  fs::current_path(dir);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  fs::current_path(cwd);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) return -1;
+  const pid_t pid = lanemap::spawnLogged(args, log, dir);
   int status = 0;
-  if (waitpid(pid, &status, 0) < 0) return -1;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  if (pid < 0 || waitpid(pid, &status, 0) < 0) return -1;
+  return lanemap::exitCode(status);
 }
 
 // Several input logs as one, in time order (a tie keeps the order of the list, then of the log):

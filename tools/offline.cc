@@ -266,18 +266,16 @@ class OfflineMapper {
   void projectInto(DriveProjection* p) { projection_ = p; }
   // --traversals: one drive's projection, mapped as its log would have been.
   void mapProjection(const std::string& dir, const nlohmann::json& m) {
-    for (const auto& c : m.at("closed")) {
+    auto traversal = [&dir](const nlohmann::json& entry) {  // {"road_id", "file"}
       bev::RoadBev road;
-      road.road_id = c.at("road_id").get<int64_t>();
-      road.grid = bev::BevGrid::load((fs::path(dir) / c.at("file").get<std::string>()).string());
-      mapTraversal(road);
-    }
+      road.road_id = entry.at("road_id").get<int64_t>();
+      road.grid = bev::BevGrid::load((fs::path(dir) / entry.at("file").get<std::string>()).string());
+      return road;
+    };
+    for (const auto& c : m.at("closed")) mapTraversal(traversal(c));
     if (const auto& open = m.at("open"); !open.is_null()) {
-      bev::RoadBev road;
-      road.road_id = open.at("road_id").get<int64_t>();
-      road.grid = bev::BevGrid::load((fs::path(dir) / open.at("file").get<std::string>()).string());
       const auto& p = open.at("last_position");
-      mapOpenRoad(road, Eigen::Vector2d(p.at(0).get<double>(), p.at(1).get<double>()));
+      mapOpenRoad(traversal(open), Eigen::Vector2d(p.at(0).get<double>(), p.at(1).get<double>()));
     }
     frames_projected_ += m.value("frames_projected", int64_t{0});
     frames_mesh_ += m.value("frames_mesh", int64_t{0});

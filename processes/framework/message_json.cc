@@ -133,7 +133,6 @@ nlohmann::json messageJson(const std::string& channel, const void* data, int siz
   if (type == "lanemap.lidar_points_t") {
     // The decoded points summarised: count, per-ring counts, sums and extremes of each coordinate.
     const auto m = decode<lidar_points_t>(channel, data, size);
-    nlohmann::json coords = nlohmann::json::object();
     auto summary = [](const std::vector<float>& v) {
       double sum = 0.0, lo = 0.0, hi = 0.0;
       for (size_t i = 0; i < v.size(); ++i) {

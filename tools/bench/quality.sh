@@ -17,10 +17,13 @@
 #                     (lanemap-sim --lanelet2: the drawn lanes are the truth, roads.osm derived)
 #   LIDAR=1           BEV on the LIDAR ground mesh (0: --no-lidar, flat plane; faster)
 #   JOBS=$(nproc)     drives simulated and mapped at once
-# Drives already simulated in OUT_DIR are reused (they do not depend on the mapping stages: after a
-# change there, run again on the same OUT_DIR); the maps and scores are always made anew.
+#   REPROJECT=1       project the drives again (after a change to segmentation, BEV or road tracking)
+# Drives already simulated in OUT_DIR are reused, and so are their projections (neither depends on
+# the mapping stages: after a change there, run again on the same OUT_DIR); the maps and scores are
+# always made anew.
 # Cost: per 150 s drive about 3 min of one core to simulate (with LIDAR), 1 min to map on the
-# truth labels, 3 min on the model; 28 drives in all by default.
+# truth labels, 3 min on the model; 30 drives in all by default. Run again on the same OUT_DIR
+# (drives and projections kept), a change to the mapping stages costs seconds a drive.
 set -euo pipefail
 build=${1:-build}
 bin=$(cd "$build/bin" && pwd)
@@ -62,8 +65,18 @@ run_one() {
     local flags=()
     [ "$lab" = oracle ] && flags=(--oracle)
     rm -rf "$d/map-$lab"
-    if ! "$bin/lanemap-offline" -q --log "$d/drive/drive.lcmlog" --osm "$d/drive/roads.osm" --out "$d/map-$lab" \
-      "${flags[@]}" "${map_flags[@]}" >"$d/offline-$lab.log" 2>&1; then
+    # The drive's projection (segmentation, BEV, road tracking: what lanemap-offline --project-only
+    # hands over) is kept and reused: the mapping stages run on it (--traversals), which gives the
+    # map --log would (tests/mapping/city_test.cc). REPROJECT=1 after a change before them.
+    if [ "${REPROJECT:-0}" = 1 ] || [ ! -f "$d/proj-$lab/projection.json" ]; then
+      rm -rf "$d/proj-$lab"
+      "$bin/lanemap-offline" -q --log "$d/drive/drive.lcmlog" --osm "$d/drive/roads.osm" --project-only "$d/proj-$lab" \
+        "${flags[@]}" "${map_flags[@]}" >"$d/project-$lab.log" 2>&1 || rm -rf "$d/proj-$lab"
+    fi
+    if [ ! -f "$d/proj-$lab/projection.json" ] ||
+      ! "$bin/lanemap-offline" -q --traversals "$d/proj-$lab" --osm "$d/drive/roads.osm" --out "$d/map-$lab" \
+        "${map_flags[@]}" >"$d/offline-$lab.log" 2>&1; then
+      [ -f "$d/proj-$lab/projection.json" ] || cp "$d/project-$lab.log" "$d/offline-$lab.log"
       # No map at all (nothing mapped, or the run failed): scored as an empty map, every driven lane missed.
       echo "   $name ($lab): lanemap-offline failed: $(tail -n 1 "$d/offline-$lab.log")"
       mkdir -p "$d/map-$lab"

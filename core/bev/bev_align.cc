@@ -140,6 +140,7 @@ Alignment mergeAligned(const BevGrid& traversal, BevGrid& fused, bool align, con
   if (!align) a.why = "alignment off";
   if (!a.ok) {
     mergeGrid(traversal, fused);
+    fused.addMerge(align ? a.correlation : 0.0);  // unaligned: how well they agree is not known
     return a;
   }
   // Both onto the frame-weighted mean: fused by -s m/(n+m), the traversal by s - s m/(n+m).
@@ -150,6 +151,7 @@ Alignment mergeAligned(const BevGrid& traversal, BevGrid& fused, bool align, con
   const Eigen::Vector2i traversal_move = a.shift_cells + fused_move;
   if (fused_move != Eigen::Vector2i::Zero()) fused = shiftedGrid(fused, fused_move);
   mergeGrid(traversal, fused, traversal_move);
+  fused.addMerge(a.correlation);
   return a;
 }
 

@@ -55,12 +55,13 @@ struct Alignment {
 // The shift of `traversal` onto `reference` (same resolution, else BevError).
 Alignment estimateShift(const BevGrid& reference, const BevGrid& traversal, const AlignOptions& options = {});
 
-// `grid` with every count moved by `shift` cells (frames kept).
+// `grid` with every count moved by `shift` cells (frames, traversals and agreement kept).
 BevGrid shiftedGrid(const BevGrid& grid, const Eigen::Vector2i& shift);
 
 // Merges `traversal` into `fused` (an empty fused grid becomes the traversal). With `align`, the
 // traversal is registered first and both are moved onto the frame-weighted mean (see above).
-// Returns the alignment measured (!ok when not aligned, with why).
+// Returns the alignment measured (!ok when not aligned, with why). A merge into evidence already
+// there counts in fused.agreement() by the alignment's correlation (0 when `align` is false).
 Alignment mergeAligned(const BevGrid& traversal, BevGrid& fused, bool align, const AlignOptions& options = {});
 
 }  // namespace lanemap::bev

@@ -13,7 +13,8 @@ namespace lanemap::bev {
 
 namespace {
 
-constexpr char kMagic[8] = {'L', 'M', 'B', 'E', 'V', '0', '0', '2'};
+constexpr char kMagic[8] = {'L', 'M', 'B', 'E', 'V', '0', '0', '3'};
+constexpr char kMagicV2[8] = {'L', 'M', 'B', 'E', 'V', '0', '0', '2'};  // no merges, agreement
 constexpr char kMagicV1[8] = {'L', 'M', 'B', 'E', 'V', '0', '0', '1'};  // no traversals
 
 int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
@@ -116,6 +117,8 @@ void BevGrid::save(const std::string& path) const {
   put<int32_t>(out, kNumLayers);
   put<int32_t>(out, frames_);
   put<int32_t>(out, traversals());
+  put<int32_t>(out, merges_);
+  put<double>(out, agreement_);
   put<uint64_t>(out, tiles_.size());
   // Sorted by key so the same grid always gives the same bytes.
   std::vector<Key> keys;
@@ -134,7 +137,8 @@ BevGrid BevGrid::load(const std::string& path) {
   if (!f) throw BevError("cannot read BEV grid file: " + path);
   const std::string in((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   const bool v1 = in.size() >= sizeof(kMagicV1) && std::memcmp(in.data(), kMagicV1, sizeof(kMagicV1)) == 0;
-  if (!v1 && (in.size() < sizeof(kMagic) || std::memcmp(in.data(), kMagic, sizeof(kMagic)) != 0)) {
+  const bool v2 = in.size() >= sizeof(kMagicV2) && std::memcmp(in.data(), kMagicV2, sizeof(kMagicV2)) == 0;
+  if (!v1 && !v2 && (in.size() < sizeof(kMagic) || std::memcmp(in.data(), kMagic, sizeof(kMagic)) != 0)) {
     throw BevError("not a lanemap BEV grid file (bad magic): " + path);
   }
   size_t pos = sizeof(kMagic);
@@ -148,6 +152,12 @@ BevGrid BevGrid::load(const std::string& path) {
   if (!v1) {
     grid.traversals_ = get<int32_t>(in, pos, path);
     if (grid.traversals_ < 0) throw BevError("BEV grid file has a negative traversal count: " + path);
+  }
+  if (!v1 && !v2) {
+    grid.merges_ = get<int32_t>(in, pos, path);
+    grid.agreement_ = get<double>(in, pos, path);
+    if (grid.merges_ < 0 || !(grid.agreement_ >= 0.0 && grid.agreement_ <= grid.merges_))
+      throw BevError("BEV grid file has a bad merge count or agreement: " + path);
   }
   const uint64_t n = get<uint64_t>(in, pos, path);
   const size_t tile_bytes = static_cast<size_t>(kNumLayers) * opt.tile_cells * opt.tile_cells * sizeof(uint16_t);
@@ -163,6 +173,13 @@ BevGrid BevGrid::load(const std::string& path) {
   return grid;
 }
 
+void BevGrid::addMerge(double agreement) { addMerges(1, std::clamp(agreement, 0.0, 1.0)); }
+
+void BevGrid::addMerges(int merges, double agreement) {
+  merges_ += merges;
+  agreement_ += agreement;
+}
+
 BevGrid::Header BevGrid::readHeader(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw BevError("cannot read BEV grid file: " + path);
@@ -170,7 +187,8 @@ BevGrid::Header BevGrid::readHeader(const std::string& path) {
   f.read(in.data(), static_cast<std::streamsize>(in.size()));
   in.resize(static_cast<size_t>(f.gcount()));
   const bool v1 = in.size() >= sizeof(kMagicV1) && std::memcmp(in.data(), kMagicV1, sizeof(kMagicV1)) == 0;
-  if (!v1 && (in.size() < sizeof(kMagic) || std::memcmp(in.data(), kMagic, sizeof(kMagic)) != 0)) {
+  const bool v2 = in.size() >= sizeof(kMagicV2) && std::memcmp(in.data(), kMagicV2, sizeof(kMagicV2)) == 0;
+  if (!v1 && !v2 && (in.size() < sizeof(kMagic) || std::memcmp(in.data(), kMagic, sizeof(kMagic)) != 0)) {
     throw BevError("not a lanemap BEV grid file (bad magic): " + path);
   }
   size_t pos = sizeof(kMagic) + 8 + 4 + 4;  // resolution, tile size, layers

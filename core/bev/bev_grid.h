@@ -82,6 +82,14 @@ class BevGrid {
   // adds the source's to the destination's.
   int traversals() const { return traversals_ > 0 ? traversals_ : (frames_ > 0 ? 1 : 0); }
   void setTraversals(int n) { traversals_ = n; }
+  // How well the traversals agreed: each merge of a traversal into evidence already there
+  // (bev_align.h mergeAligned) adds its agreement, the alignment's correlation at its peak clipped
+  // to [0, 1] (0 for a merge made unaligned). agreement() is their sum: a road driven once has 0,
+  // one driven three times by drives that agree perfectly has 2 (lane confidence, issue 14).
+  int merges() const { return merges_; }
+  double agreement() const { return agreement_; }
+  void addMerge(double agreement);  // clips to [0, 1]
+  void addMerges(int merges, double agreement);  // another grid's, when its evidence joins this one
 
   // Cells spanned by the allocated tiles (empty box when none).
   Eigen::AlignedBox2i cellBounds() const;
@@ -95,9 +103,10 @@ class BevGrid {
     for (const auto& [key, tile] : tiles_) f(tileOrigin(key), tile.data());
   }
 
-  // Binary file (little-endian): magic "LMBEV002", resolution, tile size, layers, frames,
-  // traversals, tiles. Written atomically (io::writeFileAtomically). load() also reads format 001
-  // (no traversals: an older store) and throws BevError on a bad or truncated file.
+  // Binary file (little-endian): magic "LMBEV003", resolution, tile size, layers, frames,
+  // traversals, merges, agreement, tiles. Written atomically (io::writeFileAtomically). load() also
+  // reads formats 001 (no traversals) and 002 (no merges and agreement: read as none) of older
+  // stores, and throws BevError on a bad or truncated file.
   void save(const std::string& path) const;
   static BevGrid load(const std::string& path);
   // Frames and traversals from a grid file's header, without reading its tiles (a city's worth of
@@ -114,6 +123,8 @@ class BevGrid {
   BevGridOptions options_;
   int frames_ = 0;
   int traversals_ = 0;  // 0: not counted (see traversals())
+  int merges_ = 0;
+  double agreement_ = 0.0;
   std::unordered_map<Key, std::vector<uint16_t>> tiles_;
 };
 

@@ -30,6 +30,7 @@ void mergeGrid(const BevGrid& src, BevGrid& dst, const Eigen::Vector2i& shift) {
   const int traversals = dst.traversals() + src.traversals();
   for (int i = 0; i < src.frames(); ++i) dst.addFrame();
   dst.setTraversals(traversals);
+  dst.addMerges(src.merges(), src.agreement());
 }
 
 std::string roadGridPath(const std::string& store, int64_t road_id) {

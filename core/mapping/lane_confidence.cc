@@ -32,6 +32,7 @@ std::vector<LaneConfidence> laneConfidences(const bev::BevGrid& grid, const lane
     c.observed = l.waypoints.empty() ? 0.0 : static_cast<double>(seen) / l.waypoints.size();
     c.bounds = probes == 0 ? 0.0 : static_cast<double>(found) / probes;
     c.support = best_density > 0.0 ? density[i] / best_density : 0.0;
+    c.repeat = 1.0 - std::pow(0.5, 1.0 + grid.agreement());
   }
   return out;
 }

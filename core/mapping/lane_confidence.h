@@ -1,12 +1,16 @@
 // Per-lane confidence (issue 14): a number in [0, 1] from the evidence behind an explored lane, so
-// a map user can tell the lanes to trust from those to check. The mean of three shares:
+// a map user can tell the lanes to trust from those to check. The mean of four shares:
 // - observed: the share of the lane's way-points whose BEV cell was seen drivable;
 // - bounds: the share of its boundary points that the probe found (a marking, curb or the end of
 //   the drivable area) rather than put at default_half_width_m from the centre;
 // - support: the lane's particle density (particle positions behind its regression per metre)
 //   relative to the best-supported lane of its road (a spurious lane beside a real one is
-//   carried by few particles).
-// Not in it (yet): the number of traversals and their agreement after alignment.
+//   carried by few particles);
+// - repeat: the traversals behind the road's evidence, each counted by how well it agreed with
+//   the evidence it joined (BevGrid::agreement: the alignment's correlation, 0 when merged
+//   unaligned): 1 - 0.5^(1 + agreement). One drive gives 0.5, two that agree perfectly 0.75,
+//   three 0.875. It is the road's, not the lane's: alignment measures the agreement of a road's
+//   markings as a whole.
 #pragma once
 
 #include "core/bev/bev_grid.h"
@@ -18,8 +22,8 @@
 namespace lanemap::mapping {
 
 struct LaneConfidence {
-  double observed = 0.0, bounds = 0.0, support = 0.0;
-  double value() const { return (observed + bounds + support) / 3.0; }
+  double observed = 0.0, bounds = 0.0, support = 0.0, repeat = 0.0;
+  double value() const { return (observed + bounds + support + repeat) / 4.0; }
 };
 
 // One per lane of `result` (same order).

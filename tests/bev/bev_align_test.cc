@@ -65,6 +65,13 @@ TEST(BevAlign, TraversalsFuseOnTheirMeanAndTheLinesStaySharp) {
     mean += offsets[i] / static_cast<double>(offsets.size());
   }
   EXPECT_EQ(aligned.frames(), 4 * 30);
+  // Three merges, each counted by its correlation (traversals of one road agree: above 0.5 each);
+  // merged unaligned, how well they agree is not known: no agreement.
+  EXPECT_EQ(aligned.merges(), 3);
+  EXPECT_GT(aligned.agreement(), 3 * 0.5);
+  EXPECT_LE(aligned.agreement(), 3.0);
+  EXPECT_EQ(blurred.merges(), 3);
+  EXPECT_EQ(blurred.agreement(), 0.0);
   const auto [at_aligned, spread_aligned] = solidLine(aligned);
   const auto [at_blurred, spread_blurred] = solidLine(blurred);
   const double spread_one = solidLine(traversal({0, 0}, 99)).second;
@@ -91,6 +98,7 @@ TEST(BevAlign, TheFirstTraversalIsTakenAsItIs) {
   const Alignment a = mergeAligned(t, fused, true);
   EXPECT_FALSE(a.ok);
   EXPECT_EQ(fused.frames(), t.frames());
+  EXPECT_EQ(fused.merges(), 0) << "the first traversal is no merge";
   EXPECT_NEAR(solidLine(fused).first, 0.7, 0.051);
 }
 

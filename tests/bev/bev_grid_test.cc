@@ -84,36 +84,68 @@ TEST(BevGrid, SavesAndLoadsExactly) {
   EXPECT_THROW(BevGrid::load(path), BevError);
 }
 
-// Format 002 carries the traversal count; a file of format 001 (an older store: no count) loads
-// with the same counts and frames, as one traversal.
-TEST(BevGrid, TraversalsAreSavedAndAnOlderFileIsOneTraversal) {
+// Format 003 carries the traversal count, merges and agreement; files of format 002 (no merges)
+// and 001 (an older store: no count) load with the same counts and frames: 002 with no merge, 001
+// as one traversal.
+TEST(BevGrid, TraversalsAndAgreementAreSavedAndAnOlderFileLoads) {
   BevGrid g(lanemap::bev::BevGridOptions{0.1, 16});
   g.add({3, 4}, Layer::kSolidLine, 5);
   g.addFrame();
   EXPECT_EQ(g.traversals(), 1) << "frames and never merged: one drive";
   EXPECT_EQ(BevGrid().traversals(), 0);
   g.setTraversals(3);
+  g.addMerge(0.75);
+  g.addMerge(1.7);   // clipped to 1
+  g.addMerge(-0.2);  // clipped to 0
+  EXPECT_EQ(g.merges(), 3);
+  EXPECT_DOUBLE_EQ(g.agreement(), 1.75);
   const lanemap::testing::TempDir dir("bev-grid-v1");
   const std::string path = dir.str("grid.bev");
   g.save(path);
-  EXPECT_EQ(BevGrid::load(path).traversals(), 3);
+  const BevGrid loaded = BevGrid::load(path);
+  EXPECT_EQ(loaded.traversals(), 3);
+  EXPECT_EQ(loaded.merges(), 3);
+  EXPECT_DOUBLE_EQ(loaded.agreement(), 1.75);
   const auto header = BevGrid::readHeader(path);
   EXPECT_EQ(header.frames, 1);
   EXPECT_EQ(header.traversals, 3);
 
-  // The same grid as format 001 wrote it: magic ...001, no traversal field after the frames.
+  // The same grid as format 002 wrote it: magic ...002, no merges and agreement after traversals.
   std::string bytes = lanemap::testing::readFile(path);
-  ASSERT_EQ(bytes.substr(0, 8), "LMBEV002");
-  bytes[7] = '1';
-  bytes.erase(8 + 8 + 4 + 4 + 4, 4);  // magic, resolution, tile size, layers, frames | traversals
+  ASSERT_EQ(bytes.substr(0, 8), "LMBEV003");
+  const size_t after_traversals = 8 + 8 + 4 + 4 + 4 + 4;  // magic, resolution, tile size, layers, frames, traversals
+  std::string v2 = bytes;
+  v2[7] = '2';
+  v2.erase(after_traversals, 4 + 8);
+  const std::string v2_path = dir.str("v2.bev");
+  std::ofstream(v2_path, std::ios::binary) << v2;
+  const BevGrid older = BevGrid::load(v2_path);
+  EXPECT_EQ(older.traversals(), 3);
+  EXPECT_EQ(older.merges(), 0);
+  EXPECT_EQ(older.agreement(), 0.0);
+  EXPECT_EQ(older.count(BevGrid::Cell(3, 4), Layer::kSolidLine), 5);
+  EXPECT_EQ(BevGrid::readHeader(v2_path).traversals, 3);
+
+  // Format 001: no traversal field after the frames either.
+  std::string v1 = v2;
+  v1[7] = '1';
+  v1.erase(after_traversals - 4, 4);
   const std::string old_path = dir.str("old.bev");
-  std::ofstream(old_path, std::ios::binary) << bytes;
+  std::ofstream(old_path, std::ios::binary) << v1;
   const BevGrid old = BevGrid::load(old_path);
   EXPECT_EQ(old.frames(), 1);
   EXPECT_EQ(old.count(BevGrid::Cell(3, 4), Layer::kSolidLine), 5);
   EXPECT_EQ(old.traversals(), 1);
   EXPECT_EQ(BevGrid::readHeader(old_path).traversals, 1);
-  std::ofstream(old_path) << "LMBEV003 and more bytes than a header";
+
+  // A bad agreement (more than one per merge) is refused; so is a format from the future.
+  std::string bad = bytes;
+  const double too_much = 9.0;
+  bad.replace(after_traversals + 4, 8, reinterpret_cast<const char*>(&too_much), 8);
+  const std::string bad_path = dir.str("bad.bev");
+  std::ofstream(bad_path, std::ios::binary) << bad;
+  EXPECT_THROW(BevGrid::load(bad_path), BevError);
+  std::ofstream(old_path) << "LMBEV004 and more bytes than a header";
   EXPECT_THROW(BevGrid::readHeader(old_path), BevError);
 }
 

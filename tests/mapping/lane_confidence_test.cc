@@ -1,5 +1,5 @@
 // Per-lane confidence (core/mapping/lane_confidence.h) from hand-made evidence: a lane seen drivable
-// all along, with both bounds found and the most particles, is 1.0; one seen on half its length,
+// all along, with both bounds found and the most particles, driven once, is 0.875; one seen on half its length,
 // with half its bounds at the default width and a quarter of the particle density, is the mean of
 // those shares. setConfidence puts each lane's value on its lanelets.
 #include "core/mapping/lane_confidence.h"
@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
 
 namespace lanemap::mapping {
@@ -65,11 +66,24 @@ TEST(LaneConfidence, FromObservedShareBoundsAndParticleSupport) {
   EXPECT_DOUBLE_EQ(c[0].observed, 1.0);
   EXPECT_DOUBLE_EQ(c[0].bounds, 1.0);
   EXPECT_DOUBLE_EQ(c[0].support, 1.0);
-  EXPECT_DOUBLE_EQ(c[0].value(), 1.0);
+  EXPECT_DOUBLE_EQ(c[0].repeat, 0.5) << "one drive";
+  EXPECT_DOUBLE_EQ(c[0].value(), 0.875);
   EXPECT_DOUBLE_EQ(c[1].observed, 15.0 / 31.0);  // way-points at x = 0, 2, ..., 28
   EXPECT_DOUBLE_EQ(c[1].bounds, static_cast<double>(b_found) / b_probes);
   EXPECT_DOUBLE_EQ(c[1].support, 0.25);
-  EXPECT_NEAR(c[1].value(), (15.0 / 31.0 + 16.0 / 31.0 + 0.25) / 3.0, 1e-12);
+  EXPECT_NEAR(c[1].value(), (15.0 / 31.0 + 16.0 / 31.0 + 0.25 + 0.5) / 4.0, 1e-12);
+
+  // Driven twice more by drives that agreed with it (correlations 1 and 0.5): every lane of the
+  // road gains; a third drive merged unaligned adds nothing.
+  bev::BevGrid again_grid = grid;
+  again_grid.addMerge(1.0);
+  again_grid.addMerge(0.5);
+  again_grid.addMerge(0.0);
+  const auto again = laneConfidences(again_grid, r, o);
+  EXPECT_DOUBLE_EQ(again[0].repeat, 1.0 - std::pow(0.5, 2.5));
+  EXPECT_DOUBLE_EQ(again[1].repeat, again[0].repeat);
+  EXPECT_GT(again[1].value(), c[1].value());
+  EXPECT_DOUBLE_EQ(again[0].observed, c[0].observed);
 
   map::LaneMap m = lanes::toLaneMap(r);
   setConfidence(m, r, c);

@@ -65,11 +65,21 @@ def row(name):
         return None
     l = json.load(open(p))["lanes"]
     return l
-def fmt(label, l):
+def bands(name):
+    p = os.path.join(out, f"eval-{name}.json")
+    if not os.path.exists(p):
+        return ""
+    c = json.load(open(p)).get("confidence", {}).get("bands", [])
+    def p_of(b):
+        return f"P {b['precision']:.2f}" if b["precision"] is not None else "P -"
+    return "; ".join(f"[{b['lo']:.1f},{b['hi']:.1f}) {b['built']} lanes {p_of(b)}" for b in c)
+def fmt(label, l, name=None):
     if l is None:
         print(f"  {label:<34} (mapping failed)"); return
     rms = l["rms_m"] if l["rms_m"] is not None else float("nan")
     print(f"  {label:<34} lane P {l['precision']:.3f} R {l['recall']:.3f}  centre RMS {rms:.3f} m  mIoU {l['miou'] or float('nan'):.3f}  ({l['truth']} truth lanes)")
+    if name and bands(name):
+        print(f"  {'':<34} by confidence: {bands(name)}")
 print(f"== campaign: {n} drives of one West Oakland world, each with its own pose offset (truth labels, flat)")
 for k in range(1, n + 1):
     sc = json.load(open(os.path.join(out, f"drive{k}", "scenario.json")))
@@ -77,13 +87,13 @@ for k in range(1, n + 1):
     print(f"  drive {k}: seed {sc['seed']}, pose offset east {o['east_m']:+.2f} m north {o['north_m']:+.2f} m heading {o['heading_deg']:+.3f} deg")
 alone = [row(f"alone{k}") for k in range(1, n + 1)]
 for k, l in enumerate(alone, 1):
-    fmt(f"drive {k} alone", l)
+    fmt(f"drive {k} alone", l, f"alone{k}")
 ok = [l for l in alone if l and l["rms_m"] is not None]
 once = sum(l["rms_m"] for l in ok) / len(ok) if ok else float("nan")
 print(f"  {'mean of the drives alone':<34} centre RMS {once:.3f} m (the baseline: lanes driven once)")
 for k in range(2, n + 1):
     f, b = row(f"fused{k}"), row(f"blurred{k}")
-    fmt(f"first {k} fused, aligned", f)
+    fmt(f"first {k} fused, aligned", f, f"fused{k}")
     fmt(f"first {k} fused, not aligned", b)
     if f and f["rms_m"] is not None and once == once:
         print(f"  {'':<34} aligned RMS / once: {f['rms_m'] / once:.2f} (target for 3+ drives: <= 0.70)")

@@ -13,8 +13,8 @@
 // --driven scores the roads the car drove to their end intersection (and the junction connections
 // between them): a driven road the map has no lanes on counts as missed. The road the drive ended
 // on counts as far as the car drove it (core/eval/area.h restrictToDriven: its truth cut across
-// the road at the car's last position), so lanes mapped there as far as driven are scored, not
-// counted against precision. The route comes from
+// the road at the car's last position; the road it began on from the car's first position), so
+// lanes mapped there as far as driven are scored, not counted against precision. The route comes from
 // lanemap-sim's scenario.json, or, for a recording scored against a surveyed map, from the log's
 // POSE map-matched to the OSM by the road tracker (the same as the live graph's road tracker).
 //
@@ -41,6 +41,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -51,7 +52,8 @@ namespace {
 
 // The roads a recorded drive closed: its POSE channel through the road tracker on the OSM's
 // skeleton; every kReachedIntersection closes the road it ends. The road entered and not closed
-// when the log ends is the partial one, driven to the last pose (moved into `frame`).
+// when the log ends is the partial one, driven to the last pose (moved into `frame`); the first
+// road entered counts from where it was entered (unless entered again).
 lanemap::eval::DrivenArea drivenRoadsFromLog(const std::string& log_path, const std::string& osm_path,
                                              const std::string& tracker_config, const lanemap::geo::LocalFrame& frame) {
   using namespace lanemap;
@@ -65,6 +67,8 @@ lanemap::eval::DrivenArea drivenRoadsFromLog(const std::string& log_path, const 
   size_t poses = 0;
   std::optional<eval::RoadKey> open;  // entered, not closed
   std::optional<Eigen::Vector3d> last;
+  std::optional<eval::EnteredDrive> began;  // the first road entered, where
+  std::map<eval::RoadKey, int> times_entered;
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
     if (ev->channel != channels::kPose) continue;
     pose_t m;
@@ -74,7 +78,11 @@ lanemap::eval::DrivenArea drivenRoadsFromLog(const std::string& log_path, const 
     if (p.position.allFinite()) last = p.position;
     for (const auto& e : tracker.update(toPoseInput(p))) {
       switch (e.type) {
-        case tracking::RoadEventType::kEnteredRoad: open = eval::RoadKey{e.from_node, e.to_node}; break;
+        case tracking::RoadEventType::kEnteredRoad:
+          open = eval::RoadKey{e.from_node, e.to_node};
+          ++times_entered[*open];
+          if (!began && p.position.allFinite()) began = eval::EnteredDrive{*open, frame.toEnu(sk.frame().toWgs84(p.position)).head<2>()};
+          break;
         case tracking::RoadEventType::kReachedIntersection:
           out.roads.insert({e.from_node, e.to_node});
           open.reset();
@@ -87,6 +95,10 @@ lanemap::eval::DrivenArea drivenRoadsFromLog(const std::string& log_path, const 
   }
   if (poses == 0) throw std::runtime_error(log_path + ": no " + std::string(channels::kPose) + " message");
   if (open && last) out.partial.push_back({*open, frame.toEnu(sk.frame().toWgs84(*last)).head<2>()});
+  // The road the drive began on counts from where it was entered, unless it was entered again.
+  if (began && times_entered[began->road] == 1 && (out.roads.count(began->road) || (open && *open == began->road))) {
+    out.entered.push_back(*began);
+  }
   return out;
 }
 
@@ -134,7 +146,7 @@ int main(int argc, char** argv) {
     const lanemap::geo::LatLonAlt origin = lanemap::eval::lanelet2Origin(truth_path);
     auto truth = lanemap::io::readLanelet2(truth_path, origin.lat, origin.lon, ro);
     const auto built = lanemap::io::readLanelet2(map_path, origin.lat, origin.lon, ro);
-    size_t driven_roads = 0, partial_roads = 0;
+    size_t driven_roads = 0, partial_roads = 0, entered_roads = 0;
     if (mapped_only) truth = lanemap::eval::restrictToMappedRoads(truth, built);
     if (!driven_path.empty()) {
       const bool json = std::filesystem::path(driven_path).extension() == ".json";
@@ -143,6 +155,7 @@ int main(int argc, char** argv) {
                              : drivenRoadsFromLog(driven_path, osm_path, lanemap::resolveShippedFile(tracker_config), frame);
       driven_roads = area.roads.size();
       partial_roads = area.partial.size();
+      entered_roads = area.entered.size();
       truth = lanemap::eval::restrictToDriven(truth, area);
     }
     const auto report = lanemap::eval::evaluate(truth, built, options);
@@ -150,7 +163,8 @@ int main(int argc, char** argv) {
     if (!quiet) {
       std::printf("truth: %s (%zu lanelets%s)\nmap:   %s (%zu lanelets)\n", truth_path.c_str(), truth.lanelets.size(),
                   driven_path.empty() ? "" : (", " + std::to_string(driven_roads) + " driven roads" +
-                                              (partial_roads ? " + " + std::to_string(partial_roads) + " as far as driven" : "")).c_str(),
+                                              (partial_roads ? " + " + std::to_string(partial_roads) + " as far as driven" : "") +
+                                              (entered_roads ? ", " + std::to_string(entered_roads) + " from where the drive began" : "")).c_str(),
                   map_path.c_str(), built.lanelets.size());
       std::cout << lanemap::eval::summary(report);
       if (bands.unrated < report.built_lanes.size()) std::cout << lanemap::eval::summary(bands);
@@ -166,6 +180,7 @@ int main(int argc, char** argv) {
       if (!driven_path.empty()) {
         j["driven_roads"] = driven_roads;    // to their end intersection
         j["partial_roads"] = partial_roads;  // the road the drive ended on, scored as far as driven
+        j["entered_roads"] = entered_roads;  // the road the drive began on, scored from where it began
       }
       lanemap::io::writeFileAtomically(json_path, j.dump(2) + "\n");
       if (!quiet) std::printf("wrote %s\n", json_path.c_str());

@@ -146,7 +146,7 @@ struct Cut {
 
 }  // namespace
 
-map::LaneMap cutRoadAt(const map::LaneMap& truth, const RoadKey& road, const Eigen::Vector2d& end) {
+map::LaneMap cutRoadAt(const map::LaneMap& truth, const RoadKey& road, const Eigen::Vector2d& end, CutKeep keep) {
   map::LaneMap out = truth;
   auto onRoad = [&](const map::Lanelet& l) {
     return l.kind == map::LaneletKind::kRoad && l.from_node == road.first && l.to_node == road.second;
@@ -169,6 +169,8 @@ map::LaneMap cutRoadAt(const map::LaneMap& truth, const RoadKey& road, const Eig
     }
   }
   if (!std::isfinite(best)) return out;  // the truth has no lanes on the road
+  const bool keep_after = keep == CutKeep::kKeepAfter;
+  if (keep_after) cut.t = -cut.t;  // "before" the cut against the road's direction: after it
   int64_t next_id = 1;
   for (const auto& l : truth.lines) next_id = std::max(next_id, l.id + 1);
   for (const auto& l : truth.lanelets) next_id = std::max(next_id, l.id + 1);
@@ -207,7 +209,7 @@ map::LaneMap cutRoadAt(const map::LaneMap& truth, const RoadKey& road, const Eig
       dropped.insert(l.id);
       continue;
     }
-    if (centre_cut) {  // it ends where the car stopped now: no successor, no stop line there
+    if (centre_cut && !keep_after) {  // it ends where the car stopped now: no successor, no stop line there
       l.successors.clear();
       l.stop_line_id.reset();
     }
@@ -236,6 +238,10 @@ map::LaneMap restrictToDriven(const map::LaneMap& truth, const DrivenArea& area)
     cut = cutRoadAt(cut, p.road, p.end);
     roads.insert(p.road);
   }
+  for (const auto& e : area.entered) {
+    cut = cutRoadAt(cut, e.road, e.start, CutKeep::kKeepAfter);
+    roads.insert(e.road);
+  }
   return restrictToRoads(cut, roads);
 }
 
@@ -245,31 +251,44 @@ DrivenArea drivenAreaFromScenario(const std::string& path, const geo::LocalFrame
   std::ifstream in(path);
   const nlohmann::json j = nlohmann::json::parse(in);
   const auto& route = j["route"];
-  if (route.empty() || !route.back().contains("left_utime") || !route.back()["left_utime"].is_null()) return area;
-  // The car's last position: trajectory.csv's last row (t_s,utime,east_m,north_m,up_m,...).
+  if (route.empty() || !j.contains("origin")) return area;
+  // The car's first and last positions: trajectory.csv's first and last rows
+  // (t_s,utime,east_m,north_m,up_m,...), moved into `frame`.
   std::ifstream csv(std::filesystem::path(path).parent_path() / "trajectory.csv");
-  std::string line, last;
+  std::string line, first, last;
   while (std::getline(csv, line)) {
-    if (!line.empty() && line[0] != 't') last = line;
+    if (line.empty() || line[0] == 't') continue;
+    if (first.empty()) first = line;
+    last = line;
   }
-  if (last.empty() || !j.contains("origin")) return area;
-  std::vector<double> v;
-  std::stringstream ss(last);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    try {
-      v.push_back(std::stod(item));
-    } catch (const std::exception&) {
-      v.push_back(std::nan(""));
-    }
-  }
-  if (v.size() < 5 || !std::isfinite(v[2]) || !std::isfinite(v[3])) {
-    throw std::runtime_error(path + ": trajectory.csv's last row is not t_s,utime,east_m,north_m,up_m,...");
-  }
+  if (last.empty()) return area;
   const auto& o = j["origin"];
   const geo::LocalFrame scenario_frame({o.at("lat").get<double>(), o.at("lon").get<double>(), o.value("alt", 0.0)});
-  const Eigen::Vector3d p = frame.toEnu(scenario_frame.toWgs84(Eigen::Vector3d(v[2], v[3], v[4])));
-  area.partial.push_back({{route.back()["from"].get<int64_t>(), route.back()["to"].get<int64_t>()}, p.head<2>()});
+  const auto position = [&](const std::string& row, const char* which) {
+    std::vector<double> v;
+    std::stringstream ss(row);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      try {
+        v.push_back(std::stod(item));
+      } catch (const std::exception&) {
+        v.push_back(std::nan(""));
+      }
+    }
+    if (v.size() < 5 || !std::isfinite(v[2]) || !std::isfinite(v[3])) {
+      throw std::runtime_error(path + ": trajectory.csv's " + which + " row is not t_s,utime,east_m,north_m,up_m,...");
+    }
+    return Eigen::Vector2d(frame.toEnu(scenario_frame.toWgs84(Eigen::Vector3d(v[2], v[3], v[4]))).head<2>());
+  };
+  const auto key = [](const nlohmann::json& r) { return RoadKey{r["from"].get<int64_t>(), r["to"].get<int64_t>()}; };
+  if (route.back().contains("left_utime") && route.back()["left_utime"].is_null()) {
+    area.partial.push_back({key(route.back()), position(last, "last")});
+  }
+  // The road the drive began on, unless the route enters it again from its start.
+  const RoadKey began = key(route.front());
+  size_t times = 0;
+  for (const auto& r : route) times += key(r) == began;
+  if (times == 1) area.entered.push_back({began, position(first, "first")});
   return area;
 }
 

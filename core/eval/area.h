@@ -12,6 +12,10 @@
 //   car's last position), so a map that has it as far as driven (lanemap's partial lanes) is
 //   scored on what the car could see, and one without it misses those lanes. Dropping the road
 //   (as restrictToRoads alone does) would count a partial road's lanes against precision.
+// - Likewise the road the drive began on (where the car stood when the recording started, often
+//   far into it) was driven from there to its end: its truth is cut at the car's first position,
+//   the part behind the car dropped (nothing of it was seen), unless the drive drove the road
+//   whole another time.
 // - restrictToMappedRoads (lanemap-eval --mapped-roads-only): the roads the built map has lanes
 //   on; optimistic, a road the mapper dropped does not count against it.
 #pragma once
@@ -53,25 +57,40 @@ struct PartialDrive {
   RoadKey road{-1, -1};
   Eigen::Vector2d end = Eigen::Vector2d::Zero();
 };
+// A road driven from `start` (ENU) to its end, where the drive began.
+struct EnteredDrive {
+  RoadKey road{-1, -1};
+  Eigen::Vector2d start = Eigen::Vector2d::Zero();
+};
 struct DrivenArea {
   std::set<RoadKey> roads;              // driven to their end intersection
   std::vector<PartialDrive> partial;    // the road the drive ended on (none when it ended in a junction)
+  // The road the drive began on, when it was not also driven whole (none when the drive began in a
+  // junction or drove that road again from its start).
+  std::vector<EnteredDrive> entered;
 };
 
 // drivenRoadsFromScenario, and the road the drive ended on (the route's entry with left_utime
 // null) with the car's last position: the last row of trajectory.csv beside scenario.json (ENU of
-// the scenario's "origin"), moved into `frame`. Without trajectory.csv there is no partial road.
+// the scenario's "origin"), moved into `frame`; the road it began on (the route's first entry,
+// when it is not in the route again) with the first row's position. Without trajectory.csv there
+// is no partial road and no entered one.
 DrivenArea drivenAreaFromScenario(const std::string& scenario_json_path, const geo::LocalFrame& frame);
 
-// The truth's lanelets of `road` cut at the line across the road through `end` (the part before
-// it kept; a lanelet wholly past it dropped, a stop line past it dropped). The road's direction at
-// `end` is that of the nearest of its truth centre lines; a point past the line and within
-// 15 m of `end` sideways is past the cut (a road bending back further away is not cut). The cut
-// bounds are copies under fresh ids (a bound shared with another road stays whole for it).
-map::LaneMap cutRoadAt(const map::LaneMap& truth, const RoadKey& road, const Eigen::Vector2d& end);
+// The truth's lanelets of `road` cut at the line across the road through `at`: with kKeepBefore
+// the part before it kept (a lanelet wholly past it dropped, a stop line past it dropped, the cut
+// lanelets' successors too: they end where the car stopped); with kKeepAfter the part after it (a
+// lanelet wholly behind it dropped). The road's direction at `at` is that of the nearest of its
+// truth centre lines; a point on the dropped side of the line and within 15 m of `at` sideways is
+// cut off (a road bending back further away is not cut). The cut bounds are copies under fresh ids
+// (a bound shared with another road stays whole for it).
+enum class CutKeep { kKeepBefore, kKeepAfter };
+map::LaneMap cutRoadAt(const map::LaneMap& truth, const RoadKey& road, const Eigen::Vector2d& at,
+                       CutKeep keep = CutKeep::kKeepBefore);
 
 // restrictToRoads of the roads driven to their end and the partial ones, the partial ones cut at
-// where the car stopped (cutRoadAt); crosswalks past the cut are dropped with the lanes there.
+// where the car stopped and the entered one where the car started (cutRoadAt); crosswalks on the
+// dropped side of a cut are dropped with the lanes there.
 map::LaneMap restrictToDriven(const map::LaneMap& truth, const DrivenArea& area);
 
 }  // namespace lanemap::eval

@@ -185,6 +185,57 @@ TEST(DrivenArea, ACutKeepsWholePiecesBeforeItAndDropsThoseAfter) {
   EXPECT_EQ(lanemap::eval::cutRoadAt(truth, {70, 80}, {0, 0}).lanelets.size(), truth.lanelets.size());
 }
 
+// The road a drive began on: the car stood 55 m into road 1 (x = -45 of -100..-10) when the
+// recording started; nothing behind it was seen. Scored from there, a map with road 1's lanes from
+// where the camera first saw them (x = -40) has them all; scored whole, it misses them.
+TEST(DrivenArea, TheRoadTheDriveBeganOnIsScoredFromWhereTheCarStarted) {
+  const LaneMap truth = network({});
+  lanemap::eval::DrivenArea area;
+  area.roads = {{10, 20}, {20, 30}};
+  area.entered.push_back({{10, 20}, {-45.0, -1.75}});
+  const LaneMap driven = lanemap::eval::restrictToDriven(truth, area);
+  EXPECT_EQ(roadsOf(driven), (std::set<std::pair<int64_t, int64_t>>{{10, 20}, {20, 30}}));
+  size_t road1 = 0, connectors = 0;
+  for (const auto& l : driven.lanelets) {
+    if (l.kind == LaneletKind::kIntersection) ++connectors;
+    if (l.road_id != 1) continue;
+    ++road1;
+    EXPECT_NEAR(l.centre.front().x(), -45.0, 1e-6) << "cut across the road at the car's first position";
+    EXPECT_NEAR(l.centre.back().x(), -10.0, 1e-9) << "its end is kept";
+    EXPECT_EQ(l.successors.size(), 1u) << "its connection out to road 2 is kept";
+    for (const int64_t b : {l.left_id, l.right_id}) {
+      const auto* line = driven.line(b);
+      ASSERT_NE(line, nullptr);
+      EXPECT_NEAR(line->points.front().x(), -45.0, 1e-6);
+      EXPECT_NEAR(line->points.back().x(), -10.0, 1e-6);
+    }
+  }
+  EXPECT_EQ(road1, 2u);
+  EXPECT_EQ(connectors, 2u) << "A0->B0 and A1->B1; A0->C0 leads to road 3, not driven";
+  EXPECT_NEAR(truth.line(truth.lanelets[0].left_id)->points.front().x(), -100.0, 1e-9) << "the truth itself is not cut";
+
+  // What the map could have: road 1 from x = -40 (where the camera first saw it), road 2 whole.
+  LaneMap built = lanemap::eval::restrictToRoads(truth, area.roads);
+  const auto seenFromX40 = [](std::vector<Eigen::Vector3d>& pts) {
+    pts.erase(std::remove_if(pts.begin(), pts.end(), [](const auto& p) { return p.x() < -40.0 - 1e-9; }), pts.end());
+  };
+  std::set<int64_t> road1_bounds;
+  for (auto& l : built.lanelets) {
+    if (l.road_id != 1) continue;
+    seenFromX40(l.centre);
+    road1_bounds.insert({l.left_id, l.right_id});
+  }
+  for (auto& line : built.lines) {
+    if (road1_bounds.count(line.id)) seenFromX40(line.points);
+  }
+  const auto from_start = lanemap::eval::evaluate(driven, built);
+  EXPECT_DOUBLE_EQ(from_start.lane_precision.value(), 1.0);
+  EXPECT_DOUBLE_EQ(from_start.lane_recall.value(), 1.0);
+  // Road 1 scored whole: 30 m of 90 m is no detection (IoU 0.33, coverage under a half).
+  const auto whole = lanemap::eval::evaluate(lanemap::eval::restrictToRoads(truth, area.roads), built);
+  EXPECT_DOUBLE_EQ(whole.lane_recall.value(), 2.0 / 4.0);
+}
+
 TEST(DrivenArea, TheRoadTheDriveEndedOnComesFromScenarioAndTrajectory) {
   lanemap::testing::TempDir dir("driven-partial");
   {
@@ -204,6 +255,10 @@ TEST(DrivenArea, TheRoadTheDriveEndedOnComesFromScenarioAndTrajectory) {
   EXPECT_EQ(area.partial[0].road, (lanemap::eval::RoadKey{20, 30}));
   EXPECT_NEAR(area.partial[0].end.x(), 40.0, 1e-6);
   EXPECT_NEAR(area.partial[0].end.y(), -3.0, 1e-6);
+  // The road it began on, from the first row's position.
+  ASSERT_EQ(area.entered.size(), 1u);
+  EXPECT_EQ(area.entered[0].road, (lanemap::eval::RoadKey{10, 20}));
+  EXPECT_NEAR(area.entered[0].start.norm(), 0.0, 1e-6);
   // In another frame (the truth's origin 100 m east of the scenario's), the same point.
   const lanemap::geo::LocalFrame other(same.toWgs84({100.0, 0.0, 0.0}));
   area = lanemap::eval::drivenAreaFromScenario(dir.str("scenario.json"), other);
@@ -213,6 +268,27 @@ TEST(DrivenArea, TheRoadTheDriveEndedOnComesFromScenarioAndTrajectory) {
   // Without trajectory.csv: the closed roads only.
   std::filesystem::remove(dir.str("trajectory.csv"));
   EXPECT_TRUE(lanemap::eval::drivenAreaFromScenario(dir.str("scenario.json"), same).partial.empty());
+  EXPECT_TRUE(lanemap::eval::drivenAreaFromScenario(dir.str("scenario.json"), same).entered.empty());
+}
+
+// A drive that comes back to the road it began on and drives it whole: the road counts whole.
+TEST(DrivenArea, TheRoadTheDriveBeganOnDrivenWholeLaterIsNotCut) {
+  lanemap::testing::TempDir dir("driven-entered");
+  {
+    std::ofstream f(dir.str("scenario.json"));
+    f << R"({"origin": {"lat": 37.8, "lon": -122.3, "alt": 5.0},
+             "route": [{"road_id": 4, "from": 10, "to": 20, "left_utime": 100},
+                       {"road_id": 9, "from": 20, "to": 10, "left_utime": 200},
+                       {"road_id": 4, "from": 10, "to": 20, "left_utime": 300}]})";
+    std::ofstream t(dir.str("trajectory.csv"));
+    t << "t_s,utime,east_m,north_m,up_m,yaw_rad,speed_mps,lanelet,road_id\n"
+         "0.000,0,5.0,0.0,0.0,0.0,5.0,1,4\n"
+         "0.300,300000,40.0,-3.0,0.0,0.0,5.0,2,4\n";
+  }
+  const auto area = lanemap::eval::drivenAreaFromScenario(dir.str("scenario.json"), lanemap::geo::LocalFrame({37.8, -122.3, 5.0}));
+  EXPECT_TRUE(area.entered.empty());
+  EXPECT_TRUE(area.partial.empty());
+  EXPECT_EQ(area.roads, (std::set<lanemap::eval::RoadKey>{{10, 20}, {20, 10}}));
 }
 
 }  // namespace

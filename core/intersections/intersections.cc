@@ -68,6 +68,7 @@ struct LaneEnd {
   Vector3d left = Vector3d::Zero(), right = Vector3d::Zero();  // bound end points
   double lateral = 0.0;  // signed offset from the road polyline (left positive)
   bool pocket = false;
+  double starts_at = 0.0;  // incoming: arc length where its lane starts on the road (chainStart)
   Movements moves;
 };
 
@@ -164,10 +165,18 @@ class Builder {
       e.left = boundEnd(m, ll.left_id, c);
       e.right = boundEnd(m, ll.right_id, c);
       e.lateral = pr.d;
-      if (incoming) e.pocket = chainStart(m, ll, road) > road->s_begin + o_.pocket_min_m;
+      if (incoming) e.starts_at = chainStart(m, ll, road);
       out->lanes.push_back(e);
     }
     if (out->lanes.empty()) return false;
+    // A pocket opens beside the road's other lanes: it starts pocket_min_m after the first of them
+    // (not after the road's start: a road first seen some way in, where a drive began, has its
+    // lanes start there, and none of them is a pocket for it).
+    if (incoming) {
+      double first = INFINITY;
+      for (const auto& e : out->lanes) first = std::min(first, e.starts_at);
+      for (auto& e : out->lanes) e.pocket = e.starts_at > std::max(first, road->s_begin) + o_.pocket_min_m;
+    }
     std::stable_sort(out->lanes.begin(), out->lanes.end(),
                      [](const LaneEnd& a, const LaneEnd& b) { return a.lateral > b.lateral; });
     if (incoming) assignMovements(out);

@@ -443,15 +443,18 @@ class ParticleFilter {
 
   // Start strip: across the road's observed drivable ground at the first s within 30 m that has
   // any (a road first seen some way in, after a turn: its lanes start there and are carried back
-  // to the road's start by fitLanes, as lanes that began with the strip); when there is none,
-  // across the free (unobserved) part at the start. Returns the s it starts at.
+  // to the road's start by fitLanes, as lanes that began with the strip). A road first seen
+  // farther in was entered there (a drive that began on it) or not seen before: its lanes start
+  // where it was seen (seenFromStart() false: nothing to carry them back on). When none of it was
+  // seen drivable, across the free (unobserved) part at the start. Returns the s it starts at.
   double seedStartStrip() {
     double s = s_start_;
     std::vector<std::pair<double, double>> iv;
-    for (; s < std::min(s_stop_, s_start_ + 30.0); s += 1.0) {
+    for (; s < s_stop_; s += 1.0) {
       iv = freeIntervals(s, true);
       if (!iv.empty()) break;
     }
+    seen_from_start_ = iv.empty() || s < s_start_ + 30.0;
     if (iv.empty()) {
       s = s_start_;
       iv = freeIntervals(s, false);
@@ -476,6 +479,8 @@ class ParticleFilter {
     next_birth_ = s + o_.birth_every_m;
     return s;
   }
+
+  bool seenFromStart() const { return seen_from_start_; }
 
   // Runs the steps until the particles reach I_j (or a bound on the steps). history: the
   // surviving particles (s, d) of every history_stride-th step.
@@ -740,6 +745,7 @@ class ParticleFilter {
   const int nbins_;
   double s_start_, s_stop_;
   double first_station_ = 0.0, station_ = 0.0, next_birth_ = 0.0;
+  bool seen_from_start_ = true;
   ExplorationStats& stats_;
   std::vector<Track> tracks_;
   // Per-step scratch, kept to avoid reallocating.
@@ -769,15 +775,16 @@ void dropLanes(const std::vector<bool>& drop, std::vector<Lane>* lanes) {
 
 // Fit (METHOD.md section 4, step 4): the tracks long enough become lanes, each regressed as d(s)
 // (Eq. 6: piecewise linear with optimised break points, then a natural cubic spline); a lane that
-// began with the start strip is carried back to the road's start. Split and merge relations
-// through dropped tracks go to those tracks' own relations.
+// began with the start strip is carried back to the road's start when the road was seen from
+// there (`seen_from_start`, ParticleFilter::seedStartStrip). Split and merge relations through
+// dropped tracks go to those tracks' own relations.
 std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const RoadGeometry& road, double s_stop,
-                           double min_lane_length, const ExplorerOptions& o) {
+                           double min_lane_length, bool seen_from_start, const ExplorerOptions& o) {
   std::vector<Lane> lanes;
   std::vector<int> keep_index(tracks.size(), -1);
   for (const auto& tr : tracks) {
     const double s_end = tr.active ? s_stop : tr.last_alive_s;
-    const double s_beg = tr.initial ? std::max(road.s_begin, 0.0) : tr.first_s;
+    const double s_beg = tr.initial && seen_from_start ? std::max(road.s_begin, 0.0) : tr.first_s;
     double support = 0.0;
     for (double c : tr.cnt) support += c > 0 ? o.bin_m : 0.0;
     if (s_end - s_beg < min_lane_length || support < 0.5 * min_lane_length) continue;
@@ -1041,7 +1048,7 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
 
   // 4-5. Centre lines, way-points, boundaries.
   t0 = Clock::now();
-  res.lanes = fitLanes(filter.tracks(), filter.bins(), road, s_stop, min_lane_length, o);
+  res.lanes = fitLanes(filter.tracks(), filter.bins(), road, s_stop, min_lane_length, filter.seenFromStart(), o);
   dropLanesOnNothing(R, o, &res.lanes);
   probeBoundaries(R, *frame, o, &res.lanes);
   indexLanesFromLeft(&res.lanes);

@@ -23,7 +23,10 @@
 //    in d* (local resampling: the paper's survival weights, without letting one lane's particles
 //    take over another's by drift). Births: where a footprint fits on observed drivable ground that
 //    no particle covers (a turn pocket opening, a bus bay, the lane after a parked car), particles
-//    are seeded; the paper's start strip is the first birth. Runs to s_end (the end ROI).
+//    are seeded; the paper's start strip is the first birth, across the first observed drivable
+//    ground within 30 m of the road's start (its lanes are carried back to the start); a road first
+//    seen farther in (a drive that began on it) has its lanes start where it was seen, not made up
+//    over ground nobody saw. Runs to s_end (the end ROI).
 // 3. DBSCAN (eps 1 m) over the surviving particles of each step gives the lanes at that step;
 //    clusters are linked along s into lanes, so a lane can start (split) or end (merge) mid-road; a
 //    lane that loses its particles for less than lane_gap_max_m (parked car) continues; lanes

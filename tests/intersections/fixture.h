@@ -58,6 +58,7 @@ struct LaneSpec {
   bool left_pocket = false;  // an extra left lane over the last 30 m, split from lane 0
   bool right_hand = true;    // two-way roads: lanes right (true) or left of the centre line
   double width = 3.5;
+  double first_seen_m = 0.0;  // every lane starts this far past the road's start (a drive began there)
 };
 
 // The road's lanes as core/lanes' toLaneMap would give them (ids (road_id + 1) * 100000 + k).
@@ -100,17 +101,18 @@ inline map::LaneMap roadLanes(const skeleton::Skeleton& sk, const skeleton::Atom
     return ll.id;
   };
   const double split = r.s_end - 30.0;
+  const double start = r.s_begin + spec.first_seen_m;
   const int shift = spec.left_pocket ? 1 : 0;
   for (int k = 0; k < spec.lanes; ++k) {
     if (k == 0 && spec.left_pocket) {
-      const int64_t a = piece(r.s_begin, split, offset(0), shift);
+      const int64_t a = piece(start, split, offset(0), shift);
       const int64_t b = piece(split, r.s_end, offset(0), shift);
       const int64_t p = piece(split, r.s_end, offset(0) + w, 0);
       for (auto& ll : m.lanelets) {
         if (ll.id == a) ll.successors = {b, p};
       }
     } else {
-      piece(r.s_begin, r.s_end, offset(k), k + shift);
+      piece(start, r.s_end, offset(k), k + shift);
     }
   }
   return m;

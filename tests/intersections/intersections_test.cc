@@ -376,6 +376,38 @@ TEST(IntersectionTopology, UntaggedLeftTurnPocketTakesTheLeftTurn) {
   EXPECT_EQ(from_south, sorted({{2, 0, 3, 0}, {2, 0, 4, 0}, {2, 1, 5, 0}}));
 }
 
+// A road first seen 40 m in (the drive began on it: its lanes start there) has no turn pocket:
+// a pocket opens beside the road's other lanes, so its lanes connect as if seen from the start.
+// With its own pocket, that one is still a pocket. (Before 2026-12-05 a lane starting 10 m into
+// the road was a pocket: both lanes here were, and nothing went straight on.)
+TEST(IntersectionTopology, ARoadFirstSeenFarInHasNoPocket) {
+  Net net = crossing({{"lanes", "4"}}, {{"lanes", "4"}});
+  const auto sk = net.build();
+  const auto fromSouth = [&](double first_seen, bool pocket) {
+    const auto roads = lanemap::testing::allLanes(sk, [&](const lanemap::skeleton::AtomicRoad& r) {
+      LaneSpec spec;
+      spec.lanes = laneCount(r);
+      if (r.from == 2 && r.to == 1) {
+        spec.first_seen_m = first_seen;
+        spec.left_pocket = pocket;
+      }
+      return spec;
+    });
+    std::vector<Pair> out;
+    for (const auto& p : pairsOf(sk, buildIntersection(sk, 1, roads))) {
+      if (std::get<0>(p) == 2) out.push_back(p);
+    }
+    return out;
+  };
+  const std::vector<Pair> seen_whole = fromSouth(0.0, false);
+  EXPECT_NE(std::find(seen_whole.begin(), seen_whole.end(), Pair{2, 0, 3, 0}), seen_whole.end());
+  EXPECT_NE(std::find(seen_whole.begin(), seen_whole.end(), Pair{2, 1, 3, 1}), seen_whole.end());
+  EXPECT_EQ(fromSouth(40.0, false), seen_whole);
+  // Its own pocket (over the last 30 m, over 10 m after the first lane starts): still the left turn.
+  EXPECT_EQ(fromSouth(40.0, true), fromSouth(0.0, true));
+  EXPECT_NE(fromSouth(0.0, true), seen_whole);
+}
+
 TEST(IntersectionTopology, TurnLanesSkipAPocketOsmDoesNotList) {
   // turn:lanes lists the two regular lanes; the mapped road has a pocket on the left as well.
   Net net = crossing({{"turn:lanes:forward", "through|right"}, {"lanes:forward", "2"}, {"lanes:backward", "1"}});

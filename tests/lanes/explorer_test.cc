@@ -427,6 +427,22 @@ TEST(Explorer, RoadFirstSeenTwentyMetresIn) {
   for (const Lane& l : rep.result.lanes) EXPECT_NEAR(l.s_begin, 3.0, 0.5) << "lane " << l.id;
 }
 
+// A road first seen 120 m in: the drive began there (the car stood on the road when the recording
+// started, and the camera looks ahead). Its lanes start where it was first seen: nothing was seen
+// of the 120 m before, so nothing is made up there (before 2026-12-05 the lanes were carried back
+// over it to the road's start, and particles seeded on the unseen ground drifted off the lanes).
+TEST(Explorer, RoadFirstSeenFarInStartsItsLanesThere) {
+  Scenario sc = straightLanes({3.5, 3.4}, 250.0);
+  sc.layout.observed_s0 = 123.0;
+  const Report rep = run(sc);
+  ASSERT_EQ(rep.result.lanes.size(), 2u);
+  for (const Lane& l : rep.result.lanes) {
+    EXPECT_NEAR(l.s_begin, 123.0, 2.0) << "lane " << l.id;
+    const double truth_d = sc.truth[l.index_from_left].d(0);
+    for (const auto& p : l.waypoints) EXPECT_NEAR(sc.layout.ref.toSD(p).y(), truth_d, 0.15) << "lane " << l.id;
+  }
+}
+
 // Issue 16, roads between close junctions (the benchmark's Kingsway and Fremantle cases): a road
 // 33 m long whose ROIs leave s 15-29.8 of it, seen mostly from the junction before it. The lane
 // classes are the ego lane's cross-section's only, so what the camera saw of the road from the

@@ -169,12 +169,17 @@ class Builder {
       out->lanes.push_back(e);
     }
     if (out->lanes.empty()) return false;
-    // A pocket opens beside the road's other lanes: it starts pocket_min_m after the first of them
-    // (not after the road's start: a road first seen some way in, where a drive began, has its
-    // lanes start there, and none of them is a pocket for it).
+    // A pocket opens beside the road's other lanes: it starts pocket_min_m after the first of its
+    // road's lanes (those that end before the intersection too), not merely after the road's start:
+    // a road first seen some way in, where a drive began, has its lanes start there, and none of
+    // them is a pocket for it.
     if (incoming) {
       double first = INFINITY;
-      for (const auto& e : out->lanes) first = std::min(first, e.starts_at);
+      for (const auto& ll : m.lanelets) {
+        if (ll.kind != map::LaneletKind::kRoad || ll.centre.empty()) continue;
+        if (ll.road_id >= 0 && ll.road_id != road_id) continue;
+        first = std::min(first, project(road->polyline, ll.centre.front().head<2>()).s);
+      }
       for (auto& e : out->lanes) e.pocket = e.starts_at > std::max(first, road->s_begin) + o_.pocket_min_m;
     }
     std::stable_sort(out->lanes.begin(), out->lanes.end(),

@@ -67,7 +67,7 @@ struct IntersectionOptions {
   double unseen_end_m = 30.0;
   double lane_tangent_m = 3.0;     // a lane's end direction over its last (first) metres
   double road_tangent_m = 15.0;    // a road's direction over this much past its ROI edge
-  double pocket_min_m = 10.0;      // a lane that starts this far after the approach's first lane (and into the road) is a pocket
+  double pocket_min_m = 10.0;      // a lane that starts this far after its road's first lane (and into the road) is a pocket
   // Straight on, with different numbers of lanes mapped on the two roads and no turn:lanes: lanes
   // pair by their offsets from the roads' lines, within this (0: always k -> k from the left).
   double offset_match_m = 1.5;

@@ -100,7 +100,8 @@ std::map<std::string, int64_t> logModeCounters(const std::string& drive, const s
   return c;
 }
 
-// The drive's truth on the roads it drove, and the truth file's ENU origin.
+// The drive's truth on the roads it drove to their end (the one it began on from where it began,
+// as lanemap-eval --driven scores it; not the one it ended on), and the truth file's ENU origin.
 struct DrivenTruth {
   lanemap::geo::LatLonAlt origin;
   lanemap::map::LaneMap driven;
@@ -108,7 +109,9 @@ struct DrivenTruth {
 DrivenTruth drivenTruth(const std::string& drive) {
   const auto origin = lanemap::eval::lanelet2Origin(drive + "/groundtruth.osm");
   const auto truth = lanemap::io::readLanelet2(drive + "/groundtruth.osm", origin.lat, origin.lon);
-  return {origin, lanemap::eval::restrictToRoads(truth, lanemap::eval::drivenRoadsFromScenario(drive + "/scenario.json"))};
+  auto area = lanemap::eval::drivenAreaFromScenario(drive + "/scenario.json", lanemap::geo::LocalFrame(origin));
+  area.partial.clear();
+  return {origin, lanemap::eval::restrictToDriven(truth, area)};
 }
 
 Statuses runGraph(const std::string& drive, const std::string& dir, double drop) {

@@ -59,6 +59,7 @@ struct LaneSpec {
   bool right_hand = true;    // two-way roads: lanes right (true) or left of the centre line
   double width = 3.5;
   double first_seen_m = 0.0;  // every lane starts this far past the road's start (a drive began there)
+  double stub_m = 0.0;        // > 0: one more lane, from the road's start, lost this far in (not at the junction)
 };
 
 // The road's lanes as core/lanes' toLaneMap would give them (ids (road_id + 1) * 100000 + k).
@@ -115,6 +116,7 @@ inline map::LaneMap roadLanes(const skeleton::Skeleton& sk, const skeleton::Atom
       piece(start, r.s_end, offset(k), k + shift);
     }
   }
+  if (spec.stub_m > 0.0) piece(r.s_begin, r.s_begin + spec.stub_m, offset(0), 0);
   return m;
 }
 

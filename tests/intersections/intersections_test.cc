@@ -383,13 +383,14 @@ TEST(IntersectionTopology, UntaggedLeftTurnPocketTakesTheLeftTurn) {
 TEST(IntersectionTopology, ARoadFirstSeenFarInHasNoPocket) {
   Net net = crossing({{"lanes", "4"}}, {{"lanes", "4"}});
   const auto sk = net.build();
-  const auto fromSouth = [&](double first_seen, bool pocket) {
+  const auto fromSouth = [&](double first_seen, bool pocket, double stub = 0.0) {
     const auto roads = lanemap::testing::allLanes(sk, [&](const lanemap::skeleton::AtomicRoad& r) {
       LaneSpec spec;
       spec.lanes = laneCount(r);
       if (r.from == 2 && r.to == 1) {
         spec.first_seen_m = first_seen;
         spec.left_pocket = pocket;
+        spec.stub_m = stub;
       }
       return spec;
     });
@@ -406,6 +407,11 @@ TEST(IntersectionTopology, ARoadFirstSeenFarInHasNoPocket) {
   // Its own pocket (over the last 30 m, over 10 m after the first lane starts): still the left turn.
   EXPECT_EQ(fromSouth(40.0, true), fromSouth(0.0, true));
   EXPECT_NE(fromSouth(0.0, true), seen_whole);
+  // A lane seen from the road's start and lost 20 m in: the two lanes opening 40 m in beside where
+  // it ran are pockets (turns only), as when the road is seen whole with pockets on both sides.
+  const std::vector<Pair> with_stub = fromSouth(40.0, false, 20.0);
+  EXPECT_FALSE(with_stub.empty());
+  for (const auto& p : with_stub) EXPECT_NE(std::get<2>(p), 3) << "nothing goes straight on from two pockets";
 }
 
 TEST(IntersectionTopology, TurnLanesSkipAPocketOsmDoesNotList) {

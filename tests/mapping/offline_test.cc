@@ -106,6 +106,9 @@ TEST(Offline, MapsTheDrivenRoadsAndScoresAgainstTheTruth) {
   EXPECT_EQ(rb["lanes"]["truth"], ra["lanes"]["truth"]);
   EXPECT_EQ(rb["intersections"]["truth_pairs"], ra["intersections"]["truth_pairs"]);
   EXPECT_EQ(ra["partial_roads"], rb["partial_roads"]);
+  // The road the drive began on is cut at where it began either way (the log's first road entered).
+  EXPECT_EQ(ra["entered_roads"].get<int>(), 1);
+  EXPECT_EQ(rb["entered_roads"], ra["entered_roads"]);
   // Every driven road was mapped here, so --driven scores the truth lanes scored above.
   EXPECT_EQ(ra["lanes"]["truth"].get<size_t>(), report.truth_lanes.size());
   const auto bad = lt::runCommand(eval + " --driven " + drive + "/drive.lcmlog");

@@ -17,6 +17,18 @@ constexpr char kMagic[8] = {'L', 'M', 'B', 'E', 'V', '0', '0', '3'};
 constexpr char kMagicV2[8] = {'L', 'M', 'B', 'E', 'V', '0', '0', '2'};  // no merges, agreement
 constexpr char kMagicV1[8] = {'L', 'M', 'B', 'E', 'V', '0', '0', '1'};  // no traversals
 
+// The format of a grid file from its first bytes: 1, 2 or 3 (kMagicV1, kMagicV2, kMagic); throws
+// BevError for anything else.
+int formatOf(const std::string& in, const std::string& path) {
+  const auto is = [&](const char (&magic)[8]) {
+    return in.size() >= sizeof(magic) && std::memcmp(in.data(), magic, sizeof(magic)) == 0;
+  };
+  if (is(kMagicV1)) return 1;
+  if (is(kMagicV2)) return 2;
+  if (is(kMagic)) return 3;
+  throw BevError("not a lanemap BEV grid file (bad magic): " + path);
+}
+
 int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
 template <typename T>
@@ -136,11 +148,7 @@ BevGrid BevGrid::load(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw BevError("cannot read BEV grid file: " + path);
   const std::string in((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  const bool v1 = in.size() >= sizeof(kMagicV1) && std::memcmp(in.data(), kMagicV1, sizeof(kMagicV1)) == 0;
-  const bool v2 = in.size() >= sizeof(kMagicV2) && std::memcmp(in.data(), kMagicV2, sizeof(kMagicV2)) == 0;
-  if (!v1 && !v2 && (in.size() < sizeof(kMagic) || std::memcmp(in.data(), kMagic, sizeof(kMagic)) != 0)) {
-    throw BevError("not a lanemap BEV grid file (bad magic): " + path);
-  }
+  const int format = formatOf(in, path);
   size_t pos = sizeof(kMagic);
   BevGridOptions opt;
   opt.resolution_m = get<double>(in, pos, path);
@@ -149,11 +157,11 @@ BevGrid BevGrid::load(const std::string& path) {
   if (layers != kNumLayers) throw BevError("BEV grid file has " + std::to_string(layers) + " layers, expected " + std::to_string(kNumLayers) + ": " + path);
   BevGrid grid(opt);  // validates resolution and tile size
   grid.frames_ = get<int32_t>(in, pos, path);
-  if (!v1) {
+  if (format >= 2) {
     grid.traversals_ = get<int32_t>(in, pos, path);
     if (grid.traversals_ < 0) throw BevError("BEV grid file has a negative traversal count: " + path);
   }
-  if (!v1 && !v2) {
+  if (format >= 3) {
     grid.merges_ = get<int32_t>(in, pos, path);
     grid.agreement_ = get<double>(in, pos, path);
     if (grid.merges_ < 0 || !(grid.agreement_ >= 0.0 && grid.agreement_ <= grid.merges_))
@@ -186,15 +194,11 @@ BevGrid::Header BevGrid::readHeader(const std::string& path) {
   std::string in(8 + 8 + 4 + 4 + 4 + 4, '\0');
   f.read(in.data(), static_cast<std::streamsize>(in.size()));
   in.resize(static_cast<size_t>(f.gcount()));
-  const bool v1 = in.size() >= sizeof(kMagicV1) && std::memcmp(in.data(), kMagicV1, sizeof(kMagicV1)) == 0;
-  const bool v2 = in.size() >= sizeof(kMagicV2) && std::memcmp(in.data(), kMagicV2, sizeof(kMagicV2)) == 0;
-  if (!v1 && !v2 && (in.size() < sizeof(kMagic) || std::memcmp(in.data(), kMagic, sizeof(kMagic)) != 0)) {
-    throw BevError("not a lanemap BEV grid file (bad magic): " + path);
-  }
+  const int format = formatOf(in, path);
   size_t pos = sizeof(kMagic) + 8 + 4 + 4;  // resolution, tile size, layers
   BevGrid g;
   g.frames_ = get<int32_t>(in, pos, path);
-  if (!v1) g.traversals_ = std::max(0, get<int32_t>(in, pos, path));
+  if (format >= 2) g.traversals_ = std::max(0, get<int32_t>(in, pos, path));
   return {g.frames(), g.traversals()};
 }
 

@@ -138,9 +138,12 @@ class Builder {
     // see the road's first or last metres, e.g. right after a turn).
     std::vector<std::pair<const map::Lanelet*, Projection>> candidates;
     double nearest = std::numeric_limits<double>::infinity();  // distance of a lane end from the edge
+    double first_lane = std::numeric_limits<double>::infinity();  // incoming: where its first lane starts
     for (const auto& ll : m.lanelets) {
-      if (ll.kind != map::LaneletKind::kRoad || ll.centre.size() < 2) continue;
+      if (ll.kind != map::LaneletKind::kRoad || ll.centre.empty()) continue;
       if (ll.road_id >= 0 && ll.road_id != road_id) continue;
+      if (incoming) first_lane = std::min(first_lane, project(road->polyline, ll.centre.front().head<2>()).s);
+      if (ll.centre.size() < 2) continue;
       if (incoming) {
         const bool continues = std::any_of(ll.successors.begin(), ll.successors.end(),
                                            [&](int64_t s) { return ids.count(s) > 0; });
@@ -174,13 +177,7 @@ class Builder {
     // a road first seen some way in, where a drive began, has its lanes start there, and none of
     // them is a pocket for it.
     if (incoming) {
-      double first = INFINITY;
-      for (const auto& ll : m.lanelets) {
-        if (ll.kind != map::LaneletKind::kRoad || ll.centre.empty()) continue;
-        if (ll.road_id >= 0 && ll.road_id != road_id) continue;
-        first = std::min(first, project(road->polyline, ll.centre.front().head<2>()).s);
-      }
-      for (auto& e : out->lanes) e.pocket = e.starts_at > std::max(first, road->s_begin) + o_.pocket_min_m;
+      for (auto& e : out->lanes) e.pocket = e.starts_at > std::max(first_lane, road->s_begin) + o_.pocket_min_m;
     }
     std::stable_sort(out->lanes.begin(), out->lanes.end(),
                      [](const LaneEnd& a, const LaneEnd& b) { return a.lateral > b.lateral; });

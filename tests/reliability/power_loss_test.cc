@@ -31,6 +31,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <random>
@@ -224,20 +225,31 @@ int readDone(int pipe_rd) {
 }
 
 TEST(PowerLoss, AWriterKilledAtRandomMomentsLeavesAStoreAtTheStateBeforeOrAfterItsStep) {
+  // The kills must fall at many points of many steps on any machine: the delay before a kill is
+  // drawn up to a few steps' time as measured here (a step's flushes take ~1 ms on one disk, tens
+  // on another), and rounds go on past 60 until the store went through several passes (at most 400).
+  double step_ms = 0;
+  {
+    lt::TempDir scratch("power-loss-timing");
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int64_t e = 0; e < 2 * kStepsPerPass; ++e) doStep(scratch.str(), e);
+    step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / (2 * kStepsPerPass);
+  }
+  const int max_delay_us = static_cast<int>(std::max(60000.0, 1000.0 * 6 * step_ms));
+  std::printf("one step %.1f ms here: kills drawn within %d ms\n", step_ms, max_delay_us / 1000);
   for (const unsigned seed : {1u, 2u}) {
     lt::TempDir dir("power-loss");
     const std::string store = dir.str();
     std::mt19937 rng(seed);
     int64_t e = 0;  // steps the store holds
     int kills = 0, mid_step = 0, temporaries = 0;
-    const int rounds = 60;
-    for (int round = 0; round < rounds; ++round) {
+    for (int round = 0; round < 60 || (e <= 4 * kStepsPerPass && round < 400); ++round) {
       int fds[2];
       ASSERT_EQ(pipe2(fds, O_CLOEXEC), 0);
       const pid_t pid = startWriter(store, e, e + 1000, fds[1]);
       ASSERT_GT(pid, 0);
       close(fds[1]);
-      std::this_thread::sleep_for(std::chrono::microseconds(std::uniform_int_distribution<int>(0, 60000)(rng)));
+      std::this_thread::sleep_for(std::chrono::microseconds(std::uniform_int_distribution<int>(0, max_delay_us)(rng)));
       kill(pid, SIGKILL);
       int status = 0;
       waitpid(pid, &status, 0);

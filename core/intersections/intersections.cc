@@ -114,18 +114,22 @@ class Builder {
   }
 
  private:
+  // A road's direction at the intersection: over road_tangent_m past its ROI edge.
+  Vector2d roadTangent(const skeleton::AtomicRoad& road, bool incoming) const {
+    const double s_edge = incoming ? road.s_end : road.s_begin;
+    const double s_far = incoming ? std::max(0.0, s_edge - o_.road_tangent_m)
+                                  : std::min(road.length, s_edge + o_.road_tangent_m);
+    const Vector2d p_edge = sk_.pointAt(road, s_edge), p_far = sk_.pointAt(road, s_far);
+    return unit(incoming ? Vector2d(p_edge - p_far) : Vector2d(p_far - p_edge), sk_.tangentAt(road, s_edge));
+  }
+
   bool approach(int64_t road_id, bool incoming, Approach* out, const map::LaneMap** any) {
     const skeleton::AtomicRoad* road = sk_.road(road_id);
     const auto it = roads_.find(road_id);
     if (!road || it == roads_.end() || road->polyline.size() < 2) return false;
     const map::LaneMap& m = it->second;
     out->road = road;
-    const double s_edge = incoming ? road->s_end : road->s_begin;
-    const double s_far = incoming ? std::max(0.0, s_edge - o_.road_tangent_m)
-                                  : std::min(road->length, s_edge + o_.road_tangent_m);
-    const Vector2d p_edge = sk_.pointAt(*road, s_edge), p_far = sk_.pointAt(*road, s_far);
-    out->tangent = unit(incoming ? Vector2d(p_edge - p_far) : Vector2d(p_far - p_edge),
-                        sk_.tangentAt(*road, s_edge));
+    out->tangent = roadTangent(*road, incoming);
     std::set<int64_t> ids;
     std::set<int64_t> has_pred;
     for (const auto& ll : m.lanelets) ids.insert(ll.id);
@@ -308,16 +312,35 @@ class Builder {
     if (!o_.connect_orphan_lanes || !straightest) return;
     // A lane with no connection may be headed for a way out that this map does not have (a road
     // the drive never took): then it is not an orphan, and inventing a straight connection for it
-    // would be wrong.
+    // would be wrong. It may be when the rules would let it make that road's movement (pairLanes:
+    // the left edge lane or the lanes tagged left for a left turn, the right for a right turn, any
+    // lane straight on); a lane that could not (the right lane of two where only a left turn is
+    // unmapped) is an orphan.
+    const int nin = static_cast<int>(a.lanes.size()), nout = static_cast<int>(straightest->lanes.size());
+    std::vector<bool> may_leave(a.lanes.size(), false);
     for (int64_t rid : in_.outgoing) {
       const skeleton::AtomicRoad* r = sk_.road(rid);
       const bool mapped = std::any_of(outs_.begin(), outs_.end(), [&](const Approach& d) { return d.road->id == rid; });
-      if (r && !mapped && !isUturn(*a.road, *r)) return;
+      if (!r || mapped || r->polyline.size() < 2 || isUturn(*a.road, *r)) continue;
+      Approach d;
+      d.road = r;
+      d.tangent = roadTangent(*r, false);
+      if (std::abs(headingChange(a.tangent, d.tangent)) > o_.uturn_min_deg * M_PI / 180.0) continue;  // a U-turn
+      const TurnDirection movement = turnDirection(a.tangent, d.tangent, o_.straight_max_deg);
+      if (restricted(a, d, movement, false)) continue;
+      // Its side of the straightest way out too: a way out that forks off to the left of it (within
+      // straight_max_deg of the approach, so straight on) is a left turn for the lanes there.
+      const double side = straightest->tangent.x() * d.tangent.y() - straightest->tangent.y() * d.tangent.x();
+      const TurnDirection fork = side > 0.0 ? TurnDirection::kLeft : TurnDirection::kRight;
+      std::vector<Movements> moves;
+      for (const auto& l : a.lanes) moves.push_back(l.moves);
+      for (const TurnDirection m : {movement, fork}) {
+        for (const auto& [i, o] : pairLanes(moves, nin, m, false, o_.right_hand_traffic)) may_leave[i] = true;
+      }
     }
-    const int nin = static_cast<int>(a.lanes.size()), nout = static_cast<int>(straightest->lanes.size());
     const TurnDirection movement = turnDirection(a.tangent, straightest->tangent, o_.straight_max_deg);
     for (int i = 0; i < nin; ++i) {
-      if (connections[i]) continue;
+      if (connections[i] || may_leave[i]) continue;
       const int o = o_.right_hand_traffic ? std::min(i, nout - 1) : nout - 1 - std::min(nin - 1 - i, nout - 1);
       connect(a, i, *straightest, o, movement, true);
     }

@@ -425,17 +425,31 @@ TEST(IntersectionTopology, TurnLanesSkipAPocketOsmDoesNotList) {
   EXPECT_EQ(from_south, sorted({{2, 0, 4, 0}, {2, 1, 3, 0}, {2, 2, 5, 0}}));
 }
 
-// A two-lane one-way road from the west narrows to one lane east; a two-way road leaves north.
-Net laneDropCrossing() {
+// A two-lane one-way road from the west narrows to one lane east; a two-way road leaves north
+// (node 3), or south (`side_y` = -120).
+Net laneDropCrossing(double side_y = 120.0) {
   Net net;
   net.node(1, 0, 0);
-  net.node(3, 0, 120);
+  net.node(3, 0, side_y);
   net.node(4, -120, 0);
   net.node(5, 120, 0);
   net.way(30, {4, 1}, {{"oneway", "yes"}, {"lanes", "2"}});
   net.way(31, {1, 5}, {{"oneway", "yes"}, {"lanes", "1"}});
   net.way(32, {1, 3});
   return net;
+}
+
+// The connections of `net`'s node 1 when the drive never took the side road (1 <-> 3).
+std::vector<Pair> pairsWithoutSideRoad(Net net) {
+  const auto sk = net.build();
+  std::map<int64_t, lanemap::map::LaneMap> roads;
+  for (const auto& r : sk.roads()) {
+    if (r.from == 3 || r.to == 3) continue;
+    LaneSpec spec;
+    spec.lanes = laneCount(r);
+    roads[r.id] = roadLanes(sk, r, spec);
+  }
+  return pairsOf(sk, buildIntersection(sk, 1, roads));
 }
 
 TEST(IntersectionTopology, LaneDropMergesIntoTheStraightestRoad) {
@@ -452,20 +466,41 @@ TEST(IntersectionTopology, LaneDropMergesIntoTheStraightestRoad) {
   EXPECT_EQ(pairs(net, o).size(), 3u);
 }
 
-TEST(IntersectionTopology, NoOrphanMergeWhenAWayOutIsNotMapped) {
-  // The lane-drop crossing of the test above, but the drive never took the north road (1 <-> 3):
-  // lane 1 of the west road may be turning there, so it gets no invented straight connection.
-  Net net = laneDropCrossing();
+TEST(IntersectionTopology, NoOrphanMergeForALaneThatMayTakeAWayOutNotMapped) {
+  // The lane-drop crossing of the test above with the side road south, a right turn the drive never
+  // took: the right lane of the west road may be turning there, so it gets no invented straight
+  // connection.
+  EXPECT_EQ(pairsWithoutSideRoad(laneDropCrossing(-120.0)), (std::vector<Pair>{{4, 0, 5, 0}}));
+  // The side road north, a left turn the drive never took: only the left lane may turn left (the
+  // rules: the left edge lane), so the right lane, with nowhere else to go, merges straight on.
+  EXPECT_EQ(pairsWithoutSideRoad(laneDropCrossing(120.0)), (std::vector<Pair>{{4, 0, 5, 0}, {4, 1, 5, 0}}));
+}
+
+TEST(IntersectionTopology, ALeftPocketMayTakeAWayOutForkingLeftWithinStraight) {
+  // Three lanes from the west, the leftmost a pocket opening 30 m before the junction; east a
+  // one-lane road straight on (mapped) and one forking off 30 degrees to the left (not mapped:
+  // straight on by the angle, but left of the straightest way out). The pocket (a left turn lane)
+  // is headed for the fork, not an orphan merging straight on; the other two may go either way:
+  // the left one pairs straight on, the right one is left as it is.
+  Net net;
+  net.node(1, 0, 0);
+  net.node(4, -120, 0);
+  net.node(5, 120, 0);
+  net.node(6, 120 * std::cos(M_PI / 6), 120 * std::sin(M_PI / 6));
+  net.way(30, {4, 1}, {{"oneway", "yes"}, {"lanes", "2"}});
+  net.way(31, {1, 5}, {{"oneway", "yes"}, {"lanes", "1"}});
+  net.way(32, {1, 6}, {{"oneway", "yes"}, {"lanes", "1"}});
   const auto sk = net.build();
   std::map<int64_t, lanemap::map::LaneMap> roads;
   for (const auto& r : sk.roads()) {
-    if (r.from == 3 || r.to == 3) continue;
+    if (r.to == 6) continue;
     LaneSpec spec;
     spec.lanes = laneCount(r);
+    spec.left_pocket = r.from == 4;
     roads[r.id] = roadLanes(sk, r, spec);
   }
-  const auto res = buildIntersection(sk, 1, roads);
-  EXPECT_EQ(pairsOf(sk, res), (std::vector<Pair>{{4, 0, 5, 0}}));
+  const std::vector<Pair> got = pairsOf(sk, buildIntersection(sk, 1, roads));
+  EXPECT_EQ(got, (std::vector<Pair>{{4, 1, 5, 0}}));
 }
 
 TEST(IntersectionTopology, ARoadFirstSeenLateStillConnects) {

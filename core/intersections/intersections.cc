@@ -254,7 +254,35 @@ class Builder {
     return node == in_.id || std::find(in_.osm_nodes.begin(), in_.osm_nodes.end(), node) != in_.osm_nodes.end();
   }
 
-  // True when the OSM turn restrictions forbid a -> d.
+  bool isWayOut(int64_t way) const {
+    return std::any_of(in_.outgoing.begin(), in_.outgoing.end(), [&](int64_t rid) {
+      const skeleton::AtomicRoad* r = sk_.road(rid);
+      return r && r->way_id == way;
+    });
+  }
+
+  // The ways out of here an `only_` restriction leads to: its to_way when a road out of here lies on
+  // it. In a junction merged from several nodes (the crossing of dual carriageways) the way it
+  // names may be a link between two of them: then the ways the `only_` restrictions from that link
+  // lead to, in turn (up to three links). Empty: it leads to no way out that it names (a link with
+  // no restriction of its own, from where several ways out may be reached).
+  std::set<int64_t> onlyWaysOut(const osm::Restriction& r, int depth = 0) const {
+    if (isWayOut(r.to_way)) return {r.to_way};
+    std::set<int64_t> out;
+    if (depth >= 3) return out;
+    for (const auto& q : restrictions_) {
+      if (q.from_way != r.to_way || !viaHere(q.via_node) || !startsWith(q.restriction, "only_")) continue;
+      const std::set<int64_t> w = onlyWaysOut(q, depth + 1);
+      if (w.empty()) return {};  // one link leads on unrestricted: anywhere from there
+      out.insert(w.begin(), w.end());
+    }
+    return out;
+  }
+
+  // True when the OSM turn restrictions forbid a -> d. A restriction into a link inside a merged
+  // junction: an `only_` one allows the ways out it leads to (onlyWaysOut; when it leads on
+  // unrestricted it says nothing here), a `no_` one says nothing here (the link may be one way of
+  // several to the same way out).
   bool restricted(const Approach& a, const Approach& d, TurnDirection movement, bool uturn) const {
     if (!o_.use_restrictions) return false;
     bool only_applies = false, only_ok = false;
@@ -262,6 +290,14 @@ class Builder {
       if (r.from_way != a.road->way_id || !viaHere(r.via_node)) continue;
       const bool only = startsWith(r.restriction, "only_");
       if (!only && !startsWith(r.restriction, "no_")) continue;
+      if (!isWayOut(r.to_way)) {
+        if (!only) continue;
+        const std::set<int64_t> ways = onlyWaysOut(r);
+        if (ways.empty()) continue;
+        only_applies = true;
+        only_ok |= ways.count(d.road->way_id) > 0;
+        continue;
+      }
       bool target = r.to_way == d.road->way_id;
       if (target) {
         // Several ways out on to_way (a way not split at the node, or the same way back): the

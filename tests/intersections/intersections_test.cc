@@ -337,6 +337,41 @@ TEST(IntersectionTopology, TurnRestrictions) {
   EXPECT_EQ(pairs(net, o).size(), 12u);
 }
 
+TEST(IntersectionTopology, RestrictionsThroughALinkInsideAMergedJunction) {
+  // Junction nodes 1 and 2, 10 m apart, are one intersection (a dual carriageway's crossing); the
+  // way between them (31) is inside it. From the west, OSM says only straight on into the link,
+  // and from the link only straight on east: the west road goes east, not north (from node 1) nor
+  // south (from node 2). Read as a restriction into a way no road leaves on, it allowed nothing.
+  const auto junction = [](bool link_restricted) {
+    Net net;
+    net.node(1, -5, 0);
+    net.node(2, 5, 0);
+    net.node(4, -120, 0);
+    net.node(5, 120, 0);
+    net.node(6, -5, 120);
+    net.node(7, 5, -120);
+    for (const auto& [id, nodes] : std::vector<std::pair<int64_t, std::vector<int64_t>>>{
+             {30, {4, 1}}, {31, {1, 2}}, {32, {2, 5}}, {33, {1, 6}}, {34, {2, 7}}}) {
+      net.way(id, nodes, {{"oneway", "yes"}});
+    }
+    net.restriction("only_straight_on", 30, 1, 31);
+    if (link_restricted) net.restriction("only_straight_on", 31, 2, 32);
+    const auto sk = net.build();
+    const lanemap::skeleton::Intersection* in = nullptr;
+    for (const auto& x : sk.intersections()) {
+      if (std::count(x.osm_nodes.begin(), x.osm_nodes.end(), 1)) in = &x;
+    }
+    EXPECT_TRUE(in && in->osm_nodes.size() == 2u) << "nodes 1 and 2 are one intersection";
+    std::map<int64_t, lanemap::map::LaneMap> roads;
+    for (const auto& r : sk.roads()) roads[r.id] = roadLanes(sk, r, {});
+    return pairsOf(sk, buildIntersection(sk, in ? in->id : 1, roads, {}, net.data.restrictions));
+  };
+  EXPECT_EQ(junction(true), (std::vector<Pair>{{4, 0, 5, 0}}));
+  // The link unrestricted: from it every way out may be reached, and the west road's restriction
+  // says nothing about which.
+  EXPECT_EQ(junction(false), sorted({{4, 0, 5, 0}, {4, 0, 6, 0}, {4, 0, 7, 0}}));
+}
+
 TEST(IntersectionTopology, NoUTurnOnAWayNotSplitAtTheNodeLeavesItsStraightOn) {
   Net net;
   net.node(1, 0, 0);

@@ -842,6 +842,29 @@ std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const Ro
   return lanes;
 }
 
+// A lane seen over under floating_lane_max_m beside a lane seen from lane_gap_max_m before it
+// starts to lane_gap_max_m after it ends: a stretch where the camera glimpsed a lane beyond the
+// ones it follows (the far lanes of a wide road, seen between passing cars), born beside a lane
+// (so "split off" it) and lost beside another. A pocket runs on to the junction, a lane that ends
+// began before the other, a lane added for a climb runs for hundreds of metres, and a bay (out of
+// one lane and back into it) is kept: such a glimpse can be one too (born and lost beside the same
+// lane), which this cannot tell. On a long road such pieces come and go, each off by the far
+// lines' error. Dropped, the others renumbered.
+void dropFloatingLanes(const ExplorerOptions& o, std::vector<Lane>* lanes) {
+  if (o.floating_lane_max_m <= 0.0) return;
+  std::vector<bool> drop(lanes->size(), false);
+  for (const auto& lane : *lanes) {
+    if (lane.s_end - lane.s_begin >= o.floating_lane_max_m) continue;
+    if (lane.split_from >= 0 && lane.split_from == lane.merges_into) continue;  // a bay: out of a lane and back
+    for (const auto& other : *lanes) {
+      if (other.id != lane.id && other.s_begin <= lane.s_begin - o.lane_gap_max_m && other.s_end >= lane.s_end + o.lane_gap_max_m) {
+        drop[lane.id] = true;
+      }
+    }
+  }
+  dropLanes(drop, lanes);
+}
+
 // A lane whose centre line crosses observed drivable ground at under min_drivable_share of its
 // length (sampled every metre) lies on nothing the camera saw as road: particles started across
 // a road seen only from the junctions (no drivable cell at all) live on in unobserved ground beyond
@@ -1050,6 +1073,7 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
   t0 = Clock::now();
   res.lanes = fitLanes(filter.tracks(), filter.bins(), road, s_stop, min_lane_length, filter.seenFromStart(), o);
   dropLanesOnNothing(R, o, &res.lanes);
+  dropFloatingLanes(o, &res.lanes);
   probeBoundaries(R, *frame, o, &res.lanes);
   indexLanesFromLeft(&res.lanes);
   res.stats.fit_s = since(t0);

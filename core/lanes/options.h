@@ -94,6 +94,10 @@ struct ExplorerOptions {
   double weak_density_fraction = 0.05;   // any lane with fewer particles per metre than this
                                          //   fraction of a lane over most of its stretch is
                                          //   dropped (0: never)
+  double floating_lane_max_m = 100.0;    // a lane shorter than this beside a lane seen lane_gap_max_m
+                                         //   before and after it (not a bay: out of a lane and back into
+                                         //   it) is a glimpse
+                                         //   of a far lane, not a lane: dropped (0: never)
 
   // --- centre line regression (Eq. 6) and way-points ---
   double bin_m = 1.0;                    // particle positions are binned along s (exact for Eq. 6)

@@ -225,6 +225,35 @@ TEST(Explorer, BusBay) {
   EXPECT_EQ(rep.result.laneCountAt(170.0), 2);
 }
 
+TEST(Explorer, AFarLaneGlimpsedMidRoadIsNoLane) {
+  // Three lanes, 300 m; the car in the middle one sees the right one throughout, the left one only
+  // from s = 130 to 170 (between passing trucks): elsewhere left of the dashed line beside it is
+  // ground labelled no lane and no line. A 40 m piece of lane beside lanes seen from far before to
+  // far after it is a
+  // glimpse of a lane, not a lane that opens and closes there: no lane. (Born 3.5 m from the middle
+  // lane, it would split off it and merge back, a bay, which is kept (BusBay); split_neighbour_m
+  // 3 m here makes it a piece on its own.)
+  Scenario sc = straightLanes({3.5, 3.5, 3.5}, 300.0);
+  const double e1 = 10.5 / 2 - 3.5;  // the dashed line between the left and the middle lane
+  sc.layout.boxes = {{0.0, 130.0, e1 + 0.2, 7.0}, {170.0, 300.0, e1 + 0.2, 7.0}};
+  ExplorerOptions o;
+  o.split_neighbour_m = 3.0;
+  const Report rep = run(sc, 1, o);
+  ASSERT_EQ(rep.result.lanes.size(), 2u);
+  EXPECT_EQ(rep.matched_truth, (std::set<int>{1, 2})) << "the middle and the right lane";
+  for (double r : rep.rms) EXPECT_LT(r, 0.15);
+  // Without the rule the glimpse is a lane of its own: the left lane, over the 40 m seen.
+  o.floating_lane_max_m = 0.0;
+  const Report all = run(sc, 1, o);
+  ASSERT_EQ(all.result.lanes.size(), 3u);
+  EXPECT_EQ(all.matched_truth, (std::set<int>{0, 1, 2}));
+  for (const Lane& l : all.result.lanes) {
+    if (all.match[l.id] != 0) continue;
+    EXPECT_NEAR(l.s_begin, 130.0, 6.0);
+    EXPECT_NEAR(l.s_end, 170.0, 6.0);
+  }
+}
+
 TEST(Explorer, HundredMetresWithoutMarkings) {
   // Two lanes, 260 m; from s = 80 to 180 no paint and no lane separation (worn out, and the
   // segmentation cannot tell the lanes apart either), only the curbs.

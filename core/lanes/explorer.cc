@@ -847,15 +847,23 @@ std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const Ro
 // ones it follows (the far lanes of a wide road, seen between passing cars), born beside a lane
 // (so "split off" it) and lost beside another. A pocket runs on to the junction, a lane that ends
 // began before the other, a lane added for a climb runs for hundreds of metres, and a bay (out of
-// one lane and back into it) is kept: such a glimpse can be one too (born and lost beside the same
-// lane), which this cannot tell. On a long road such pieces come and go, each off by the far
-// lines' error. Dropped, the others renumbered.
+// one lane and back into it, on the kerb side: no lane beside it there) is kept: a glimpse of the
+// kerb-side lane can be one too, which this cannot tell. On a long road such pieces come and go,
+// each off by the far lines' error. Dropped, the others renumbered.
 void dropFloatingLanes(const ExplorerOptions& o, std::vector<Lane>* lanes) {
   if (o.floating_lane_max_m <= 0.0) return;
   std::vector<bool> drop(lanes->size(), false);
   for (const auto& lane : *lanes) {
     if (lane.s_end - lane.s_begin >= o.floating_lane_max_m) continue;
-    if (lane.split_from >= 0 && lane.split_from == lane.merges_into) continue;  // a bay: out of a lane and back
+    // A bay: out of a lane and back into it, on the kerb side (nothing beside it there).
+    if (lane.split_from >= 0 && lane.split_from == lane.merges_into) {
+      const double sm = 0.5 * (lane.s_begin + lane.s_end), dm = lane.centre.d(sm);
+      const bool kerb_side = std::none_of(lanes->begin(), lanes->end(), [&](const Lane& other) {
+        return other.id != lane.id && other.s_begin <= sm && other.s_end >= sm &&
+               (o.right_hand_traffic ? other.centre.d(sm) < dm : other.centre.d(sm) > dm);
+      });
+      if (kerb_side) continue;
+    }
     for (const auto& other : *lanes) {
       if (other.id != lane.id && other.s_begin <= lane.s_begin - o.lane_gap_max_m && other.s_end >= lane.s_end + o.lane_gap_max_m) {
         drop[lane.id] = true;

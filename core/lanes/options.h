@@ -96,7 +96,7 @@ struct ExplorerOptions {
                                          //   dropped (0: never)
   double floating_lane_max_m = 100.0;    // a lane shorter than this beside a lane seen lane_gap_max_m
                                          //   before and after it (not a bay: out of a lane and back into
-                                         //   it) is a glimpse
+                                         //   it on the kerb side) is a glimpse
                                          //   of a far lane, not a lane: dropped (0: never)
 
   // --- centre line regression (Eq. 6) and way-points ---

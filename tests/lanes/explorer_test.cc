@@ -229,28 +229,34 @@ TEST(Explorer, AFarLaneGlimpsedMidRoadIsNoLane) {
   // Three lanes, 300 m; the car in the middle one sees the right one throughout, the left one only
   // from s = 130 to 170 (between passing trucks): elsewhere left of the dashed line beside it is
   // ground labelled no lane and no line. A 40 m piece of lane beside lanes seen from far before to
-  // far after it is a
-  // glimpse of a lane, not a lane that opens and closes there: no lane. (Born 3.5 m from the middle
-  // lane, it would split off it and merge back, a bay, which is kept (BusBay); split_neighbour_m
-  // 3 m here makes it a piece on its own.)
+  // far after it is a glimpse of a lane, not a lane that opens and closes there: no lane. Born and
+  // lost 3.5 m from the middle lane it splits off it and merges back, as a bay does; but a bay lies
+  // on the kerb side (BusBay keeps one), this on the far side of the middle lane. With
+  // split_neighbour_m 3 m it is a piece on its own, dropped all the same.
   Scenario sc = straightLanes({3.5, 3.5, 3.5}, 300.0);
   const double e1 = 10.5 / 2 - 3.5;  // the dashed line between the left and the middle lane
   sc.layout.boxes = {{0.0, 130.0, e1 + 0.2, 7.0}, {170.0, 300.0, e1 + 0.2, 7.0}};
   ExplorerOptions o;
-  o.split_neighbour_m = 3.0;
-  const Report rep = run(sc, 1, o);
-  ASSERT_EQ(rep.result.lanes.size(), 2u);
-  EXPECT_EQ(rep.matched_truth, (std::set<int>{1, 2})) << "the middle and the right lane";
-  for (double r : rep.rms) EXPECT_LT(r, 0.15);
-  // Without the rule the glimpse is a lane of its own: the left lane, over the 40 m seen.
-  o.floating_lane_max_m = 0.0;
-  const Report all = run(sc, 1, o);
+  for (const double split_neighbour_m : {o.split_neighbour_m, 3.0}) {
+    o.split_neighbour_m = split_neighbour_m;
+    const Report rep = run(sc, 1, o);
+    ASSERT_EQ(rep.result.lanes.size(), 2u) << "split_neighbour_m " << split_neighbour_m;
+    EXPECT_EQ(rep.matched_truth, (std::set<int>{1, 2})) << "the middle and the right lane";
+    for (double r : rep.rms) EXPECT_LT(r, 0.15);
+  }
+  // Without the rule the glimpse is a lane of its own: the left lane, over the 40 m seen, out of
+  // the middle lane and back into it.
+  ExplorerOptions off;
+  off.floating_lane_max_m = 0.0;
+  const Report all = run(sc, 1, off);
   ASSERT_EQ(all.result.lanes.size(), 3u);
   EXPECT_EQ(all.matched_truth, (std::set<int>{0, 1, 2}));
   for (const Lane& l : all.result.lanes) {
     if (all.match[l.id] != 0) continue;
     EXPECT_NEAR(l.s_begin, 130.0, 6.0);
     EXPECT_NEAR(l.s_end, 170.0, 6.0);
+    EXPECT_GE(l.split_from, 0);
+    EXPECT_EQ(l.split_from, l.merges_into);
   }
 }
 
@@ -533,6 +539,7 @@ TEST(Explorer, NoLanesOfSpeckledGround) {
   expectLanes(rep, sc);
   ExplorerOptions off;
   off.bulge_density_fraction = 0.0;
+  off.floating_lane_max_m = 0.0;  // which drops such pieces too, on the side away from the kerb
   const Report without = run(sc, 1, off);
   EXPECT_GE(without.result.lanes.size(), 4u) << "without the rule the pieces are lanes";
   for (const Lane& l : without.result.lanes) {

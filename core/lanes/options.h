@@ -95,9 +95,9 @@ struct ExplorerOptions {
                                          //   fraction of a lane over most of its stretch is
                                          //   dropped (0: never)
   double floating_lane_max_m = 100.0;    // a lane shorter than this beside a lane seen lane_gap_max_m
-                                         //   before and after it (not a bay: out of a lane and back into
-                                         //   it on the kerb side) is a glimpse
-                                         //   of a far lane, not a lane: dropped (0: never)
+                                         //   before and after it (not a bay: out of a lane and back
+                                         //   into it on the kerb side) is a glimpse of a far lane,
+                                         //   not a lane: dropped (0: never)
 
   // --- centre line regression (Eq. 6) and way-points ---
   double bin_m = 1.0;                    // particle positions are binned along s (exact for Eq. 6)

@@ -170,7 +170,7 @@ int main(int argc, char** argv) {
                                    "a coverage file (lanemap-coverage --json of the store): the route covers the most road it does "
                                    "not list as mapped in --duration (core/mapping/coverage.h planCoverage)");
   cover_opt->excludes(route_opt);
-  app.add_option("--cover-from", cover_from, "--cover: the intersection to start at (default: the start of a seeded road not mapped)")
+  app.add_option("--cover-from", cover_from, "--cover: the intersection to start at (default: seeded, the start of a road still to cover out of a dead end, else of any road still to cover)")
       ->needs(cover_opt);
   app.add_option("--seed", seed, "random seed: the route, speeds, pose noise and light (and the world, without --world-seed)");
   app.add_option("--world-seed", world_seed,
@@ -263,17 +263,8 @@ int main(int argc, char** argv) {
     nlohmann::json cover_json = nullptr;
     if (!cover_path.empty()) {
       const auto cov = mapping::readCoverageJson(cover_path, sk);
-      if (cover_from < 0) {  // the start of a seeded road still to cover (any road when none is)
-        std::vector<int64_t> open;
-        for (const auto& c : cov.roads) {
-          if (c.state != mapping::RoadState::kMapped) open.push_back(c.from);
-        }
-        if (open.empty()) {
-          for (const auto& c : cov.roads) open.push_back(c.from);
-        }
-        if (open.empty()) throw sim::RouteError("--cover: no roads");
-        cover_from = open[std::mt19937_64(seed * 104729 + 3)() % open.size()];
-      }
+      // Default: a road still to cover out of a dead end (only a drive's start covers those).
+      if (cover_from < 0) cover_from = mapping::coverageStart(sk, cov, seed);
       // Planned at 0.75 of the cruise speed: the car slows for turns and starts from standstill.
       const auto cover_plan = mapping::planCoverage(sk, cov, cover_from, duration, 0.75 * drive.cruise_speed_mps);
       if (cover_plan.roads.empty()) throw sim::RouteError("--cover: no road left to cover within reach of " + std::to_string(cover_from));

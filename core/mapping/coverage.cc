@@ -11,6 +11,7 @@
 #include <fstream>
 #include <cmath>
 #include <map>
+#include <random>
 #include <set>
 #include <stdexcept>
 
@@ -262,6 +263,21 @@ CityCoverage readCoverageJson(const std::string& path, const skeleton::Skeleton&
   }
   totalAndSort(out);
   return out;
+}
+
+int64_t coverageStart(const skeleton::Skeleton& sk, const CityCoverage& coverage, uint64_t seed) {
+  std::vector<int64_t> out_of_dead_end, open, any;
+  for (const auto& c : coverage.roads) {
+    any.push_back(c.from);
+    if (c.state == RoadState::kMapped || c.length_m - c.mapped_m <= 0.0) continue;
+    open.push_back(c.from);
+    const auto* at = sk.intersection(c.from);
+    const auto* to = sk.intersection(c.to);
+    if (at && at->dead_end && to && !to->dead_end) out_of_dead_end.push_back(c.from);
+  }
+  const auto& pick = !out_of_dead_end.empty() ? out_of_dead_end : !open.empty() ? open : any;
+  if (pick.empty()) throw std::invalid_argument("no roads to start a drive on");
+  return pick[std::mt19937_64(seed * 104729 + 3)() % pick.size()];
 }
 
 CoveragePlan planCoverage(const skeleton::Skeleton& sk, const CityCoverage& coverage, int64_t start, double seconds, double speed_mps,

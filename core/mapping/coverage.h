@@ -56,6 +56,14 @@ struct CoveragePlan {
 CoveragePlan planCoverage(const skeleton::Skeleton& skeleton, const CityCoverage& coverage, int64_t start_intersection,
                           double seconds, double speed_mps = 8.0, int lookahead = 4);
 
+// Where a campaign's next drive starts when no intersection is given (lanemap-sim --cover): the
+// start of a road still to cover that only a drive's first road can cover, one leaving a dead end
+// (no U-turns: a drive that enters a dead end ends there, so nothing else brings the car out of
+// one) into the network (not a piece between two dead ends, where the drive would end at once);
+// else the start of any road still to cover; else of any road. `seed` picks among them.
+// Throws std::invalid_argument when the skeleton has no road.
+int64_t coverageStart(const skeleton::Skeleton& skeleton, const CityCoverage& coverage, uint64_t seed);
+
 // A coverage file (lanemap-coverage --json) read back against `skeleton`: the roads' states and
 // mapped lengths (lanemap-sim --cover plans on it). Throws std::runtime_error naming the file when
 // it cannot be read, or when a road id's ends are not the skeleton's (made from another OSM file

@@ -240,6 +240,56 @@ TEST(Coverage, ThePlanIsAConnectedRouteThatCoversMostlyNewRoad) {
   EXPECT_EQ(none.new_m, 0.0);
 }
 
+// A campaign's next drive starts out of a dead end while a road leaving one into the network is
+// still to cover: no U-turns, so only a drive's first road covers such a road (this city has 16
+// dead ends, and a piece of road between two of them). Then at any road still to cover.
+TEST(Coverage, ADriveStartsOnARoadOutOfADeadEndWhileOneIsStillToCover) {
+  const auto sk = cityOf();
+  Store s;
+  makeStore(sk, s);
+  CityCoverage cov = cityCoverage(sk, s.dir.str());
+  const auto deadEnd = [&](int64_t node) { return sk.intersection(node)->dead_end; };
+  std::set<int64_t> dead_end_starts, starts;
+  for (uint64_t seed = 0; seed < 40; ++seed) {
+    const int64_t at = coverageStart(sk, cov, seed);
+    EXPECT_EQ(at, coverageStart(sk, cov, seed)) << "the same seed, the same start";
+    ASSERT_NE(sk.intersection(at), nullptr);
+    EXPECT_TRUE(deadEnd(at)) << "seed " << seed << ": intersection " << at << " is no dead end";
+    const auto* road = sk.road(sk.intersection(at)->outgoing.at(0));
+    EXPECT_FALSE(deadEnd(road->to)) << "seed " << seed << ": road " << road->id << " leads into another dead end: the drive would end at once";
+    dead_end_starts.insert(at);
+  }
+  EXPECT_GE(dead_end_starts.size(), 3u) << "the seed chooses among the dead ends";
+  // Every road out of a dead end mapped: the start of a road still to cover, no dead end (its one
+  // road out is mapped).
+  size_t open = 0;
+  for (auto& c : cov.roads) {
+    if (deadEnd(c.from)) {
+      c.state = RoadState::kMapped;
+      c.mapped_m = c.length_m;
+    } else if (c.state != RoadState::kMapped) {
+      ++open;
+    }
+  }
+  ASSERT_GT(open, 0u);
+  for (uint64_t seed = 0; seed < 40; ++seed) {
+    const int64_t at = coverageStart(sk, cov, seed);
+    EXPECT_FALSE(deadEnd(at));
+    bool leaves_open = false;
+    for (const auto& c : cov.roads) leaves_open |= c.from == at && c.state != RoadState::kMapped;
+    EXPECT_TRUE(leaves_open) << "seed " << seed << ": no road still to cover leaves " << at;
+    starts.insert(at);
+  }
+  EXPECT_GE(starts.size(), 3u);
+  // All mapped: a road's start all the same (a drive again over mapped roads).
+  for (auto& c : cov.roads) {
+    c.state = RoadState::kMapped;
+    c.mapped_m = c.length_m;
+  }
+  EXPECT_NE(sk.intersection(coverageStart(sk, cov, 5)), nullptr);
+  EXPECT_THROW(coverageStart(sk, CityCoverage{}, 5), std::invalid_argument);
+}
+
 TEST(Coverage, TheToolWritesTheFiguresAndNamesWhatItCouldNotRead) {
   const auto sk = cityOf();
   Store s;

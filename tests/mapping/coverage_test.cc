@@ -21,6 +21,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -238,6 +240,45 @@ TEST(Coverage, ThePlanIsAConnectedRouteThatCoversMostlyNewRoad) {
   const CoveragePlan none = planCoverage(sk, all, start, seconds, speed);
   EXPECT_TRUE(none.roads.empty());
   EXPECT_EQ(none.new_m, 0.0);
+}
+
+// A hairpin onto another road (a heading change over 150 degrees, no road's reverse) is a U-turn the
+// simulator's world and the mapper do not connect: the plan drives round instead. This city has one
+// (a one-way secondary road into a junction, and an unclassified road leaving it nearly back).
+TEST(Coverage, ThePlanMakesNoHairpinTurn) {
+  const auto sk = cityOf();
+  const auto headingChangeDeg = [&](const skeleton::AtomicRoad& a, const skeleton::AtomicRoad& d) {
+    const Eigen::Vector2d tin = sk.pointAt(a, a.s_end) - sk.pointAt(a, std::max(0.0, a.s_end - 15.0));
+    const Eigen::Vector2d tout = sk.pointAt(d, std::min(d.length, d.s_begin + 15.0)) - sk.pointAt(d, d.s_begin);
+    return std::abs(std::atan2(tin.x() * tout.y() - tin.y() * tout.x(), tin.dot(tout))) * 180.0 / M_PI;
+  };
+  std::vector<std::pair<const skeleton::AtomicRoad*, const skeleton::AtomicRoad*>> hairpins;
+  for (const auto& a : sk.roads()) {
+    for (const int64_t id : sk.intersection(a.to)->outgoing) {
+      const auto* d = sk.road(id);
+      if (d->id != a.reverse_id && headingChangeDeg(a, *d) > 150.0) hairpins.push_back({&a, d});
+    }
+  }
+  ASSERT_FALSE(hairpins.empty()) << "the city has a hairpin to test on";
+  for (const auto& [a, d] : hairpins) {
+    // Everything mapped but the road the hairpin leads onto; the drive starts on the road into it.
+    Store s;
+    makeStore(sk, s);
+    CityCoverage cov = cityCoverage(sk, s.dir.str());
+    for (auto& c : cov.roads) {
+      c.state = c.road_id == d->id ? RoadState::kNeverDriven : RoadState::kMapped;
+      c.mapped_m = c.road_id == d->id ? 0.0 : c.length_m;
+    }
+    const CoveragePlan plan = planCoverage(sk, cov, a->from, 600.0, 8.0);
+    ASSERT_FALSE(plan.roads.empty());
+    EXPECT_NE(std::find(plan.roads.begin(), plan.roads.end(), d->id), plan.roads.end()) << "road " << d->id << " is reached round";
+    for (size_t i = 1; i < plan.roads.size(); ++i) {
+      const auto* p = sk.road(plan.roads[i - 1]);
+      const auto* r = sk.road(plan.roads[i]);
+      EXPECT_LE(headingChangeDeg(*p, *r), 150.0) << "road " << p->id << " -> " << r->id;
+      EXPECT_NE(p->reverse_id, r->id);
+    }
+  }
 }
 
 // A campaign's next drive starts out of a dead end while a road leaving one into the network is

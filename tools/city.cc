@@ -56,7 +56,7 @@ struct Options {
   std::string store, osm, semantic_channel, model;
   std::vector<std::string> drives;
   int jobs = 0;  // 0: every core
-  bool oracle = false, no_lidar = false, no_align = false, slurm = false, slurm_dry_run = false;
+  bool oracle = false, no_lidar = false, no_align = false, drive_offsets = false, slurm = false, slurm_dry_run = false;
 };
 
 // The store's folder of projections: NNNN (whole) in the order the drives were added.
@@ -168,7 +168,10 @@ int main(int argc, char** argv) {
   app.add_option("--semantic-channel", o.semantic_channel, "map on the labels of this channel of the logs")->excludes(oracle);
   app.add_option("--model", o.model, "ONNX model, instead of config/segmenter.yaml's");
   app.add_flag("--no-lidar", o.no_lidar, "project on the flat plane only");
-  app.add_flag("--no-align", o.no_align, "fuse later drives unaligned (to see what alignment removes)");
+  auto* no_align = app.add_flag("--no-align", o.no_align, "fuse later drives unaligned (to see what alignment removes)");
+  app.add_flag("--drive-offsets", o.drive_offsets,
+               "fuse after solving each drive's own pose offset over the roads drives share (lanemap-offline --drive-offsets)")
+      ->excludes(no_align);
   auto* slurm = app.add_flag("--slurm", o.slurm, "write the jobs for Slurm (S/slurm/*.sbatch) and submit them with sbatch");
   app.add_flag("--slurm-dry-run", o.slurm_dry_run, "with --slurm: write the job scripts, do not submit")->needs(slurm);
   CLI11_PARSE(app, argc, argv);
@@ -215,6 +218,7 @@ int main(int argc, char** argv) {
       for (const auto& p : all) a.insert(a.end(), {"--traversals", p.string()});
       a.insert(a.end(), labels.begin(), labels.end());
       if (o.no_align) a.push_back("--no-align");
+      if (o.drive_offsets) a.push_back("--drive-offsets");
       return a;
     };
 

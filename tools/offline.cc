@@ -40,6 +40,7 @@
 // One road's trouble never costs the map: a road whose exploration fails is named on stderr and in
 // summary.json (roads_failed, with the reason), and every other road is still mapped.
 #include "core/bev/bev_align.h"
+#include "core/bev/drive_offsets.h"
 #include "core/bev/bev_builder.h"
 #include "core/bev/bev_store.h"
 #include "core/camera/camera_model.h"
@@ -96,6 +97,7 @@ struct Options {
   std::string project_only;       // the one drive's traversals saved to this folder, not mapped
   std::vector<std::string> traversals;  // drives projected before (--project-only folders), mapped in this order
   bool no_align = false;          // merge later drives' BEV unaligned (to measure what alignment does)
+  bool drive_offsets = false;     // --traversals: each drive's offset solved over the roads drives share first
   std::string osm, out;
   std::string semantic_channel;  // empty: segment CAMERA_FRONT with the model
   bool oracle = false;
@@ -186,6 +188,35 @@ nlohmann::json readProjection(const std::string& dir) {
   return m;
 }
 
+// --drive-offsets: each projected drive's offset (core/bev/drive_offsets.h), solved over every road
+// two or more of the drives saw (a drive's traversals of a road merged, its open road included).
+bev::DriveOffsets solveDriveOffsets(const std::vector<std::string>& dirs, const std::vector<nlohmann::json>& manifests) {
+  std::map<int64_t, std::map<size_t, std::vector<std::string>>> files;  // road -> drive -> grid files
+  for (size_t d = 0; d < manifests.size(); ++d) {
+    for (const auto& c : manifests[d].at("closed")) {
+      files[c.at("road_id").get<int64_t>()][d].push_back((fs::path(dirs[d]) / c.at("file").get<std::string>()).string());
+    }
+    if (const auto& open = manifests[d].at("open"); !open.is_null()) {
+      files[open.at("road_id").get<int64_t>()][d].push_back((fs::path(dirs[d]) / open.at("file").get<std::string>()).string());
+    }
+  }
+  bev::DriveOffsetSolver solver(manifests.size());
+  for (const auto& [road, by_drive] : files) {
+    if (by_drive.size() < 2) continue;
+    std::vector<bev::BevGrid> grids;  // one per drive, loaded for this road only
+    grids.reserve(by_drive.size());
+    for (const auto& [d, paths] : by_drive) {
+      grids.emplace_back();
+      for (const auto& p : paths) bev::mergeGrid(bev::BevGrid::load(p), grids.back());
+    }
+    std::vector<std::pair<size_t, const bev::BevGrid*>> in;
+    size_t k = 0;
+    for (const auto& [d, paths] : by_drive) in.push_back({d, &grids[k++]});
+    solver.addRoad(in);
+  }
+  return solver.solve();
+}
+
 class OfflineMapper {
  public:
   OfflineMapper(const Options& o, const OfflineConfig& c, const skeleton::Skeleton& sk,
@@ -264,18 +295,24 @@ class OfflineMapper {
 
   // --project-only: what the drive's BEV builder hands over goes to `p`, nothing is mapped.
   void projectInto(DriveProjection* p) { projection_ = p; }
-  // --traversals: one drive's projection, mapped as its log would have been.
-  void mapProjection(const std::string& dir, const nlohmann::json& m) {
-    auto traversal = [&dir](const nlohmann::json& entry) {  // {"road_id", "file"}
+  // --traversals: one drive's projection, mapped as its log would have been; with --drive-offsets
+  // every grid first moved by -offset_m (whole cells: the drive's offset undone).
+  void mapProjection(const std::string& dir, const nlohmann::json& m, const Eigen::Vector2d& offset_m = Eigen::Vector2d::Zero()) {
+    Eigen::Vector2d moved = Eigen::Vector2d::Zero();
+    auto traversal = [&](const nlohmann::json& entry) {  // {"road_id", "file"}
       bev::RoadBev road;
       road.road_id = entry.at("road_id").get<int64_t>();
       road.grid = bev::BevGrid::load((fs::path(dir) / entry.at("file").get<std::string>()).string());
+      const Eigen::Vector2i cells = bev::correctionCells(offset_m, road.grid.resolution());
+      if (cells != Eigen::Vector2i::Zero()) road.grid = bev::shiftedGrid(road.grid, cells);
+      moved = cells.cast<double>() * road.grid.resolution();
       return road;
     };
     for (const auto& c : m.at("closed")) mapTraversal(traversal(c));
     if (const auto& open = m.at("open"); !open.is_null()) {
       const auto& p = open.at("last_position");
-      mapOpenRoad(traversal(open), Eigen::Vector2d(p.at(0).get<double>(), p.at(1).get<double>()));
+      const bev::RoadBev road = traversal(open);
+      mapOpenRoad(road, Eigen::Vector2d(p.at(0).get<double>(), p.at(1).get<double>()) + moved);
     }
     frames_projected_ += m.value("frames_projected", int64_t{0});
     frames_mesh_ += m.value("frames_mesh", int64_t{0});
@@ -553,6 +590,9 @@ int main(int argc, char** argv) {
                  "project the one --log drive and save what it hands over per road into this folder (grids and "
                  "projection.json), without mapping (lanemap-city's first stage; --out gets nothing)")->needs(logs)->excludes(traversals);
   app.add_flag("--no-align", o.no_align, "merge later drives' BEV as it comes, unaligned (shows the blur alignment removes)");
+  app.add_flag("--drive-offsets", o.drive_offsets,
+               "--traversals: first solve each drive's own pose offset over the roads drives share and undo it in all "
+               "its roads, those driven once too (core/bev/drive_offsets.h)")->needs(traversals)->excludes("--no-align");
   app.add_option("--osm", o.osm, "road-level OSM file of the area (.osm or .osm.pbf)")->required();
   auto* out = app.add_option("--out", o.out, "output folder (created): map.osm, map.geojson, map.png, summary.json, bev/");
   auto* oracle = app.add_flag("--oracle", o.oracle, "map on the simulator's truth labels (SEMANTIC_FRONT_TRUTH), no model");
@@ -638,16 +678,22 @@ int main(int argc, char** argv) {
     nlohmann::json drives = nlohmann::json::array();
     int64_t undecodable = 0;
     // --traversals: the drives projected before, fused in the order given.
+    std::optional<bev::DriveOffsets> offsets;
+    if (o.drive_offsets) offsets = solveDriveOffsets(o.traversals, projections);
     for (size_t d = 0; d < projections.size(); ++d) {
       const nlohmann::json& m = projections[d];
       if (d > 0) mapper.startDrive();
-      mapper.mapProjection(o.traversals[d], m);
+      mapper.mapProjection(o.traversals[d], m, offsets ? offsets->offset_m[d] : Eigen::Vector2d::Zero());
       for (const char* k : {"events", "bytes", "bytes_skipped", "bytes_unread"}) {
         log_read[k] = log_read[k].get<int64_t>() + m.at("log_read").value(k, int64_t{0});
       }
       undecodable += m.at("log_read").value("messages_undecodable", int64_t{0});
       damaged = damaged || m.at("log_read").value("damaged", false);
       drives.push_back({{"log", m.value("log", std::string())}, {"merged", mapper.endDrive()}});
+      if (offsets) {
+        drives.back()["offset_m"] = {offsets->offset_m[d].x(), offsets->offset_m[d].y()};
+        drives.back()["offset_measurements"] = offsets->measurements[d];
+      }
     }
     for (size_t d = 0; d < o.logs.size(); ++d) {
       const std::string& path = o.logs[d];

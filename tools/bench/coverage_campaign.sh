@@ -7,7 +7,8 @@
 # (lanemap-coverage) and the map's scores against the whole city's truth (lanemap-eval, not
 # --driven: a road not driven yet counts as missed), lanes and junction pairs. A drive starts out of
 # a dead end while a road leaving one is still to cover (lanemap-sim --cover's default start: no
-# U-turns, so only a drive's first road covers those). At the end: the simulated seconds against
+# U-turns, so only a drive's first road covers those). At the end: every drive fused again with its
+# own offset solved over the roads drives share (lanemap-offline --drive-offsets, "+off"), the simulated seconds against
 # the simulator's wall time, and Lanelet2's own checks on the fused map when they are built
 # (tests/lanelet2_tools builds them into ~/.cache/lanelet2-1.2.3/bin, or LANELET2_BIN).
 #
@@ -83,13 +84,36 @@ secs = sum(json.load(open(p))["duration_s"] for p in glob.glob(os.path.join(out,
 print(f"  simulated {secs:.0f} s of driving in {len(glob.glob(os.path.join(out, 'drive*', 'scenario.json')))} drives; "
       f"lanemap-sim wall time this run {wall:.0f} s (drives simulated before this run not counted)")
 PY
+# The same drives fused once more with each drive's own offset solved over the roads drives share
+# (lanemap-offline --drive-offsets, core/bev/drive_offsets.h), scored the same way.
+trav=()
+for p in "$out"/city/projections/[0-9]*; do trav+=(--traversals "$p"); done
+if [ ${#trav[@]} -gt 0 ] && "$bin/lanemap-offline" -q --oracle --no-lidar --osm "$out/drive1/roads.osm" "${trav[@]}" --drive-offsets \
+      --out "$out/map-offsets" > "$out/map-offsets.log" 2>&1; then
+  "$bin/lanemap-eval" -q --truth "$out/drive1/groundtruth.osm" --map "$out/map-offsets/map.osm" --json "$out/eval-offsets.json" > /dev/null 2>&1 || true
+  python3 - "$out" "$drives" <<'PY'
+import json, os, sys
+out, k = sys.argv[1], sys.argv[2]
+try:
+    j = json.load(open(os.path.join(out, "eval-offsets.json")))
+    l, i = j["lanes"], j["intersections"]
+    nan = float("nan")
+    f = lambda v, w: f"{v if v is not None else nan:{w}.3f}"
+    print(f"  {k + ' +off':<16} {'':>9} {'':>8} {f(l['precision'], 7)} {f(l['recall'], 7)} {f(l['rms_m'], 9)} {f(l['miou'], 8)} "
+          f"{f(i['precision'], 7)} {f(i['recall'], 7)} {f(i['rms_m'], 9)}   (all {k} drives fused with --drive-offsets)")
+except (OSError, KeyError, TypeError, ValueError) as e:
+    print(f"  --drive-offsets: no score ({e})")
+PY
+else
+  echo "  --drive-offsets: lanemap-offline failed (see $out/map-offsets.log)"
+fi
 l2bin=${LANELET2_BIN:-${XDG_CACHE_HOME:-$HOME/.cache}/lanelet2-1.2.3/bin}
 final=$out/map$drives/map.osm
 if [ -x "$l2bin/lanelet2_validate" ] && [ -x "$l2bin/route_check" ] && [ -f "$final" ]; then
   origin=$(python3 -c "import json,sys; o=json.load(open(sys.argv[1]))['origin']; print(f\"{o['lat']:.10f} {o['lon']:.10f}\")" "${final%.osm}.lanemap.json" 2>/dev/null || true)
   set -- $origin
-  v=$("$l2bin/lanelet2_validate" ${1:+--lat $1 --lon $2} "$final" 2>&1 | tail -1)
-  r=$("$l2bin/route_check" "$final" ${1:+--origin $1 $2} 2>&1 | tail -1)
+  v=$( ("$l2bin/lanelet2_validate" ${1:+--lat $1 --lon $2} "$final" 2>&1 || true) | tail -1)  # exit 1 on warnings too
+  r=$( ("$l2bin/route_check" "$final" ${1:+--origin $1 $2} 2>&1 || true) | tail -1)
   echo "  Lanelet2 on the fused map: lanelet2_validate: $v; route_check: $r"
 else
   echo "  Lanelet2's checks: not built (tests/lanelet2_tools builds them) or no fused map"

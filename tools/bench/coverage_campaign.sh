@@ -91,7 +91,7 @@ for p in "$out"/city/projections/[0-9]*; do trav+=(--traversals "$p"); done
 if [ ${#trav[@]} -gt 0 ] && "$bin/lanemap-offline" -q --oracle --no-lidar --osm "$out/drive1/roads.osm" "${trav[@]}" --drive-offsets \
       --out "$out/map-offsets" > "$out/map-offsets.log" 2>&1; then
   "$bin/lanemap-eval" -q --truth "$out/drive1/groundtruth.osm" --map "$out/map-offsets/map.osm" --json "$out/eval-offsets.json" > /dev/null 2>&1 || true
-  python3 - "$out" "$drives" <<'PY'
+  python3 - "$out" "$(( ${#trav[@]} / 2 ))" <<'PY'
 import json, os, sys
 out, k = sys.argv[1], sys.argv[2]
 try:

@@ -40,9 +40,9 @@
 // One road's trouble never costs the map: a road whose exploration fails is named on stderr and in
 // summary.json (roads_failed, with the reason), and every other road is still mapped.
 #include "core/bev/bev_align.h"
-#include "core/bev/drive_offsets.h"
 #include "core/bev/bev_builder.h"
 #include "core/bev/bev_store.h"
+#include "core/bev/drive_offsets.h"
 #include "core/camera/camera_model.h"
 #include "core/config/vehicle_config.h"
 #include "core/io/geojson.h"

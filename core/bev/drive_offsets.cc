@@ -36,7 +36,6 @@ DriveOffsets DriveOffsetSolver::solve() const {
   out.offset_m.assign(n, Eigen::Vector2d::Zero());
   out.measurements.assign(n, 0);
   out.component.resize(n);
-  std::iota(out.component.begin(), out.component.end(), 0);
   // Components of the drives linked by a trusted pair (union-find).
   std::vector<size_t> parent(n);
   std::iota(parent.begin(), parent.end(), size_t{0});
@@ -51,8 +50,8 @@ DriveOffsets DriveOffsetSolver::solve() const {
   }
   for (size_t d = 0; d < n; ++d) out.component[d] = static_cast<int>(find(d));
   if (pairs_.empty()) return out;
-  // Weighted least squares on the graph Laplacian, per axis; a small ridge picks, of the solutions
-  // (each component's offsets are fixed up to a common shift), the one of zero mean per component.
+  // Weighted least squares on the graph Laplacian, both axes at once; each component's offsets are
+  // fixed up to a common shift, taken as the one that gives them zero mean.
   Eigen::MatrixXd L = Eigen::MatrixXd::Zero(n, n);
   Eigen::MatrixXd b = Eigen::MatrixXd::Zero(n, 2);
   for (const auto& p : pairs_) {

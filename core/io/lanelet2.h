@@ -17,7 +17,8 @@
 //   (Lanelet2 uses `ele` as z). Autoware's `local_x`/`local_y` node tags are written on request
 //   (Lanelet2WriteOptions::local_xy_tags; the validator calls them unknown tags) and read when
 //   they agree with lat/lon in the reader's frame.
-// - Points closer than 5 cm (Lanelet2's points_too_close limit) are one node in the file.
+// - Points closer than 5.01 cm (Lanelet2's points_too_close limit, 5 cm, with a margin for the
+//   UTM scale its validator measures in) are one node in the file.
 // - Lanelet2 has no successor tags; successors are recovered from shared end/start points.
 // - Stop lines are ways type=stop_line; the lanelet that ends at one names it in the sidecar (and
 //   in Autoware's layout, when no regulatory element below has it as ref_line, references a

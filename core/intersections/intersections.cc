@@ -4,6 +4,7 @@
 #include "core/config/yaml_reader.h"
 #include "core/geo/polyline.h"
 #include "core/io/lanelet2_orientation.h"
+#include "core/skeleton/road_direction.h"
 
 #include <algorithm>
 #include <cmath>
@@ -116,11 +117,7 @@ class Builder {
  private:
   // A road's direction at the intersection: over road_tangent_m past its ROI edge.
   Vector2d roadTangent(const skeleton::AtomicRoad& road, bool incoming) const {
-    const double s_edge = incoming ? road.s_end : road.s_begin;
-    const double s_far = incoming ? std::max(0.0, s_edge - o_.road_tangent_m)
-                                  : std::min(road.length, s_edge + o_.road_tangent_m);
-    const Vector2d p_edge = sk_.pointAt(road, s_edge), p_far = sk_.pointAt(road, s_far);
-    return unit(incoming ? Vector2d(p_edge - p_far) : Vector2d(p_far - p_edge), sk_.tangentAt(road, s_edge));
+    return skeleton::directionAtJunction(sk_, road, incoming, o_.road_tangent_m);
   }
 
   bool approach(int64_t road_id, bool incoming, Approach* out, const map::LaneMap** any) {
@@ -354,6 +351,8 @@ class Builder {
     // unmapped) is an orphan.
     const int nin = static_cast<int>(a.lanes.size()), nout = static_cast<int>(straightest->lanes.size());
     std::vector<bool> may_leave(a.lanes.size(), false);
+    std::vector<Movements> moves;
+    for (const auto& l : a.lanes) moves.push_back(l.moves);
     for (int64_t rid : in_.outgoing) {
       const skeleton::AtomicRoad* r = sk_.road(rid);
       const bool mapped = std::any_of(outs_.begin(), outs_.end(), [&](const Approach& d) { return d.road->id == rid; });
@@ -368,8 +367,6 @@ class Builder {
       // straight_max_deg of the approach, so straight on) is a left turn for the lanes there.
       const double side = straightest->tangent.x() * d.tangent.y() - straightest->tangent.y() * d.tangent.x();
       const TurnDirection fork = side > 0.0 ? TurnDirection::kLeft : TurnDirection::kRight;
-      std::vector<Movements> moves;
-      for (const auto& l : a.lanes) moves.push_back(l.moves);
       for (const TurnDirection m : {movement, fork}) {
         for (const auto& [i, o] : pairLanes(moves, nin, m, false, o_.right_hand_traffic)) may_leave[i] = true;
       }

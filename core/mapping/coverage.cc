@@ -3,7 +3,9 @@
 #include "core/bev/bev_grid.h"
 #include "core/bev/bev_store.h"
 #include "core/intersections/curve.h"
+#include "core/intersections/intersections.h"
 #include "core/io/lanelet2.h"
+#include "core/skeleton/road_direction.h"
 
 #include <nlohmann/json.hpp>
 
@@ -151,29 +153,23 @@ struct Planner {
     return it == left.end() ? 0.0 : it->second;
   }
 
-  // A road's direction at the intersection: over 15 m past its ROI edge (the intersection
-  // builder's road_tangent_m).
-  Eigen::Vector2d tangent(const skeleton::AtomicRoad& r, bool incoming) const {
-    constexpr double kTangentM = 15.0;
-    const double edge = incoming ? r.s_end : r.s_begin;
-    const double far = incoming ? std::max(0.0, edge - kTangentM) : std::min(r.length, edge + kTangentM);
-    const Eigen::Vector2d d = incoming ? Eigen::Vector2d(sk.pointAt(r, edge) - sk.pointAt(r, far))
-                                       : Eigen::Vector2d(sk.pointAt(r, far) - sk.pointAt(r, edge));
-    return d.norm() > 1e-6 ? Eigen::Vector2d(d.normalized()) : sk.tangentAt(r, edge);
-  }
-
   // The roads one may take after `prev` (nullptr: at the start): those leaving its end, but no
   // U-turn (a driver avoids them; no map has them, METHOD.md 5): not straight back, nor a heading
-  // change beyond kUturnMinDeg (150 degrees, the intersection builder's uturn_min_deg: a hairpin
-  // onto another road, which neither the mapper nor the simulator's world connects).
+  // change beyond the intersection builder's default uturn_min_deg (150 degrees), measured as it
+  // measures turns: a hairpin onto another road, which neither the mapper nor the simulator's
+  // world connects.
   template <class F>
   void next(int64_t at, const skeleton::AtomicRoad* prev, F&& f) const {
-    constexpr double kUturnMinDeg = 150.0;
+    static const intersections::IntersectionOptions kJunction;
     const auto it = out_of.find(at);
     if (it == out_of.end()) return;
     for (const auto* r : it->second) {
       if (prev && prev->reverse_id == r->id) continue;
-      if (prev && std::abs(intersections::headingChange(tangent(*prev, true), tangent(*r, false))) > kUturnMinDeg * M_PI / 180.0) continue;
+      if (prev && std::abs(intersections::headingChange(skeleton::directionAtJunction(sk, *prev, true, kJunction.road_tangent_m),
+                                                        skeleton::directionAtJunction(sk, *r, false, kJunction.road_tangent_m))) >
+                      kJunction.uturn_min_deg * M_PI / 180.0) {
+        continue;
+      }
       f(r);
     }
   }

@@ -60,9 +60,9 @@ if k > 1:
     before = {r["road_id"] for r in json.load(open(os.path.join(out, f"coverage{k-1}.json")))["roads"] if r["state"] in ("mapped", "partial")}
 new = sum(1 for r in route if r["road_id"] not in before)
 try:
-    l = json.load(open(os.path.join(out, f"eval{k}.json")))["lanes"]
+    scored = json.load(open(os.path.join(out, f"eval{k}.json")))
+    l, j = scored["lanes"], scored["intersections"]
     rms = l["rms_m"] if l["rms_m"] is not None else float("nan")
-    j = json.load(open(os.path.join(out, f"eval{k}.json")))["intersections"]
     nan = float("nan")
     crms = j["rms_m"] if j["rms_m"] is not None else nan
     scores = (f"{l['precision']:7.3f} {l['recall']:7.3f} {rms:9.3f} {l['miou'] or nan:8.3f} "

@@ -90,12 +90,83 @@ ModelConfig ModelConfig::fromYaml(const config::YamlReader& r, const std::string
   if (up == "scores") c.upsample_scores = true;
   else if (up == "labels") c.upsample_scores = false;
   else r.fail("upsample", "must be scores or labels, not '" + up + "'");
+  const std::string d2s = r.get<std::string>("depth_to_space", "segmenter");
+  if (d2s == "segmenter") c.shuffle_in_segmenter = true;
+  else if (d2s == "model") c.shuffle_in_segmenter = false;
+  else r.fail("depth_to_space", "must be segmenter or model, not '" + d2s + "'");
   return c;
 }
 
 struct Segmenter::Impl {
   cv::dnn::Net net;
   cv::Mat blob;
+  // A trailing DepthToSpace done here (findShuffle): the layer whose output it takes, its block.
+  std::string shuffle_from;
+  int block = 0;
+  cv::Mat scores;            // 1 x C x H x W, the shuffled scores (reused)
+  std::vector<cv::Mat> up;   // per-class scores at the frame's size (reused)
+
+  // The model's scores: the whole network, or up to shuffle_from and the pixel shuffle here.
+  cv::Mat forward() {
+    if (block == 0) return net.forward();
+    const cv::Mat in = net.forward(shuffle_from);
+    const int Cb = in.size[1], h = in.size[2], w = in.size[3], C = Cb / (block * block);
+    const int sizes[4] = {1, C, h * block, w * block};
+    scores.create(4, sizes, CV_32F);
+    depthToSpaceCrd(in, block, scores);
+    return scores;
+  }
+
+  // ONNX DepthToSpace, mode CRD (what PyTorch's PixelShuffle exports): out[c][y][x] =
+  // in[c*b*b + (y%b)*b + x%b][y/b][x/b].
+  static void depthToSpaceCrd(const cv::Mat& in, int b, cv::Mat& out) {
+    const int h = in.size[2], w = in.size[3], C = out.size[1], W = w * b;
+    for (int c = 0; c < C; ++c)
+      for (int by = 0; by < b; ++by)
+        for (int bx = 0; bx < b; ++bx) {
+          const float* src = in.ptr<float>(0, c * b * b + by * b + bx);
+          float* dst = out.ptr<float>(0, c);
+          for (int y = 0; y < h; ++y) {
+            const float* s = src + static_cast<size_t>(y) * w;
+            float* d = dst + static_cast<size_t>(y * b + by) * W + bx;
+            for (int x = 0; x < w; ++x) d[static_cast<size_t>(x) * b] = s[x];
+          }
+        }
+  }
+
+  // Looks among the last layers before the output for one whose output the pixel shuffle turns into
+  // the network's own output, exactly, on a random input: then forward() stops there.
+  void findShuffle(int input_width, int input_height) {
+    const int sizes[4] = {1, 3, input_height, input_width};
+    cv::Mat probe(4, sizes, CV_32F);
+    cv::RNG rng(0x5eed);
+    rng.fill(probe, cv::RNG::UNIFORM, -2.0, 2.0);
+    net.setInput(probe);
+    const cv::Mat whole = net.forward().clone();
+    if (whole.dims != 4) return;
+    const int C = whole.size[1], H = whole.size[2], W = whole.size[3];
+    const std::vector<cv::String> names = net.getLayerNames();
+    for (int back = 2; back <= 6 && back <= static_cast<int>(names.size()); ++back) {
+      const std::string& name = names[names.size() - static_cast<size_t>(back)];
+      cv::Mat in;
+      try {
+        net.setInput(probe);
+        in = net.forward(name);
+      } catch (const cv::Exception&) {
+        continue;
+      }
+      if (in.dims != 4 || in.type() != CV_32F || in.size[0] != 1) continue;
+      for (int b = 2; b <= 8; ++b) {
+        if (in.size[1] != C * b * b || in.size[2] * b != H || in.size[3] * b != W) continue;
+        cv::Mat shuffled(4, whole.size.p, CV_32F);
+        depthToSpaceCrd(in, b, shuffled);
+        if (std::memcmp(shuffled.data, whole.data, whole.total() * sizeof(float)) != 0) continue;
+        shuffle_from = name;
+        block = b;
+        return;
+      }
+    }
+  }
 };
 
 Segmenter::Segmenter(const ModelConfig& config) : config_(config), impl_(std::make_unique<Impl>()) {
@@ -142,6 +213,13 @@ Segmenter::Segmenter(const ModelConfig& config) : config_(config), impl_(std::ma
     if (out.dims < 2 || total != static_cast<size_t>(h) * w)
       throw ModelError("segmentation model '" + config_.path + "': expected one class id per pixel (N x H x W)");
   }
+  if (config_.output == ModelConfig::Output::kScores && config_.shuffle_in_segmenter) {
+    try {
+      impl_->findShuffle(config_.input_width, config_.input_height);
+    } catch (const cv::Exception&) {
+      impl_->block = 0;  // the network runs whole
+    }
+  }
   map_.fill(0);
   for (int i = 0; i < 256; ++i) {
     int c = i;
@@ -151,6 +229,8 @@ Segmenter::Segmenter(const ModelConfig& config) : config_(config), impl_(std::ma
 }
 
 Segmenter::~Segmenter() = default;
+
+int Segmenter::shuffleBlock() const { return impl_->block; }
 
 cv::Mat Segmenter::segment(const cv::Mat& bgr) {
   if (bgr.empty() || bgr.type() != CV_8UC3) throw FrameError("segment: need a BGR CV_8UC3 image");
@@ -182,7 +262,7 @@ cv::Mat Segmenter::segmentRegion(const cv::Mat& bgr) {
     split[c].convertTo(planes[c], CV_32F, a, b);
   }
   impl_->net.setInput(impl_->blob);
-  cv::Mat out = impl_->net.forward();
+  const cv::Mat out = impl_->forward();
 
   const cv::Size frame = bgr.size();
   cv::Mat labels(frame, CV_8UC1);
@@ -197,9 +277,10 @@ cv::Mat Segmenter::segmentRegion(const cv::Mat& bgr) {
   }
   const int C = out.size[1], h = out.size[2], w = out.size[3];
   if (config_.upsample_scores && (h != frame.height || w != frame.width)) {
-    std::vector<cv::Mat> up(static_cast<size_t>(C));
+    std::vector<cv::Mat>& up = impl_->up;
+    up.resize(static_cast<size_t>(C));
     for (int c = 0; c < C; ++c) {
-      cv::Mat plane(h, w, CV_32F, out.ptr<float>(0, c));
+      cv::Mat plane(h, w, CV_32F, const_cast<float*>(out.ptr<float>(0, c)));
       cv::resize(plane, up[static_cast<size_t>(c)], frame, 0, 0, cv::INTER_LINEAR);
     }
     for (int r = 0; r < frame.height; ++r) {

@@ -52,9 +52,14 @@ struct ModelConfig {
   std::vector<int> class_map;
   bool upsample_scores = true;       // bilinear scores to the frame size, then argmax (false:
                                      // argmax at the model's size, nearest-neighbour upsampling)
+  // A model whose scores end in a DepthToSpace (a pixel shuffle, as the shipped LaneSegNet's do):
+  // OpenCV 4.6 runs it as a 6-D Permute that takes a quarter of the forward pass. true: the
+  // segmenter takes the layer before it and lays the scores out itself, after checking at load, on
+  // a random input, that the result equals the model's own output exactly (else the model's own).
+  bool shuffle_in_segmenter = true;
 
   // Keys: path, name, input_width, input_height, crop_top, rgb, scale, mean, std, output (scores|labels),
-  // class_map, upsample (scores|labels). Relative paths resolve against base_dir (if not empty)
+  // class_map, upsample (scores|labels), depth_to_space (segmenter|model). Relative paths resolve against base_dir (if not empty)
   // when the file is not found as given. Throws ModelError naming the key.
   static ModelConfig fromYaml(const YAML::Node& node, const std::string& base_dir = "");
   // The same from a config section (config/segmenter.yaml `model:`), `model_path` (when not empty)
@@ -84,6 +89,9 @@ class Segmenter {
   const ModelConfig& config() const { return config_; }
   const std::string& name() const { return config_.name; }
   int modelClasses() const { return model_classes_; }
+  // The model's trailing DepthToSpace is done by the segmenter (shuffle_in_segmenter and the load
+  // check passed): its block size, 0 when the network runs whole.
+  int shuffleBlock() const;
 
  private:
   cv::Mat segmentRegion(const cv::Mat& bgr);  // the model's classes for all of bgr

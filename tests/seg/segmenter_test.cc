@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -190,6 +191,31 @@ TEST(SegModel, CropTopRowsAreBackgroundAndTheRestIsTheModelsView) {
   }
 }
 
+TEST(SegModel, TheSegmentersPixelShuffleGivesTheModelsOwnLabels) {
+  // The shipped model's scores end in a DepthToSpace (block 2, CRD): by default the segmenter stops
+  // the network before it and lays the scores out itself (issue 17: OpenCV's 6-D Permute was a
+  // quarter of the forward pass). Its labels must be the model's own, pixel for pixel, on real
+  // frames and on a frame of another size (resized to the input like any other).
+  seg::ModelConfig c = shippedModel();
+  seg::Segmenter fast(c);
+  EXPECT_EQ(fast.shuffleBlock(), 2);
+  c.shuffle_in_segmenter = false;
+  seg::Segmenter whole(c);
+  EXPECT_EQ(whole.shuffleBlock(), 0);
+  long labelled = 0;
+  for (const uint64_t seed : {4242u, 4243u}) {
+    const cv::Mat img = oneFrame(seed);
+    ASSERT_FALSE(img.empty());
+    const cv::Mat a = fast.segment(img), b = whole.segment(img);
+    EXPECT_EQ(cv::countNonZero(a != b), 0) << "seed " << seed;
+    labelled += cv::countNonZero(a);
+    cv::Mat small;
+    cv::resize(img, small, cv::Size(500, 300));
+    EXPECT_EQ(cv::countNonZero(fast.segment(small) != whole.segment(small)), 0) << "seed " << seed;
+  }
+  EXPECT_GT(labelled, 2 * 640 * 240 / 4);  // road scenes, not blank answers
+}
+
 TEST(SegConfig, ErrorsNameTheKey) {
   auto err = [](const std::string& yaml) {
     try {
@@ -206,6 +232,9 @@ TEST(SegConfig, ErrorsNameTheKey) {
   EXPECT_NE(err("{path: m.onnx, mean: [1, 2]}").find("'mean' must be 3 numbers"), std::string::npos);
   EXPECT_NE(err("{path: m.onnx, input_width: 2}").find("input_width"), std::string::npos);
   EXPECT_NE(err("{path: m.onnx, crop_top: -1}").find("crop_top"), std::string::npos);
+  EXPECT_NE(err("{path: m.onnx, depth_to_space: gpu}").find("'depth_to_space' must be segmenter or model"), std::string::npos);
+  EXPECT_FALSE(seg::ModelConfig::fromYaml(YAML::Load("{path: m.onnx, depth_to_space: model}")).shuffle_in_segmenter);
+  EXPECT_TRUE(seg::ModelConfig::fromYaml(YAML::Load("{path: m.onnx}")).shuffle_in_segmenter);
   EXPECT_EQ(seg::ModelConfig::fromYaml(YAML::Load("{path: m.onnx, crop_top: 120}")).crop_top, 120);
   const auto c = seg::ModelConfig::fromYaml(YAML::Load("{path: models/lanesegnet.onnx, mean: 0.5, upsample: labels}"), kRoot);
   EXPECT_EQ(c.path, kRoot + "/models/lanesegnet.onnx");  // resolved against the base folder

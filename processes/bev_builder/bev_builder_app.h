@@ -2,7 +2,8 @@
 // in; one BEV grid per closed atomic road out, written atomically to <store>/bev/road_<id>.bev and
 // announced on BEV_ROAD (METHOD.md section 3); about once a second a picture of the open road's grid
 // on BEV_OPEN for the viewer (config `preview`). Crash recovery: the open road's grid is
-// checkpointed every checkpoint.period_s to <store>/bev/open/ (core/bev/bev_store.h); a builder
+// checkpointed every checkpoint.period_s to <store>/bev/open/ (core/bev/bev_store.h), written by
+// core/bev/checkpoint_writer.h's thread so that frames never wait for the disk; a builder
 // that starts and finds checkpoints carries those roads on (STATUS roads_recovered,
 // frames_recovered, and recovered_gap_ms: the time between the checkpoint's newest frame and the
 // first frame after the restart, what the crash cost). End of the drive (the process stops: the log
@@ -28,6 +29,7 @@
 #include "core/bev/bev_builder.h"
 #include "core/bev/bev_render.h"
 #include "core/bev/bev_store.h"
+#include "core/bev/checkpoint_writer.h"
 #include "core/camera/camera_model.h"
 #include "core/config/vehicle_config.h"
 #include "core/io/store_lock.h"
@@ -64,7 +66,8 @@ class BevBuilderApp {
  public:
   BevBuilderApp(Process& process, std::unique_ptr<skeleton::Skeleton> skeleton, const camera::CameraModel& camera,
                 const bev::BevBuilderOptions& options, std::string store)
-      : process_(process), skeleton_(std::move(skeleton)), builder_(*skeleton_, camera, options), store_(std::move(store)) {
+      : process_(process), skeleton_(std::move(skeleton)), builder_(*skeleton_, camera, options), store_(std::move(store)),
+        checkpoints_(store_) {
     builder_.setProjectedCallback([this](int64_t utime) { onProjected(utime); });
   }
 
@@ -214,6 +217,7 @@ class BevBuilderApp {
     const auto active = builder_.accumulator().activeRoads();
     for (auto it = checkpointed_.begin(); it != checkpointed_.end();) {
       if (std::find(active.begin(), active.end(), it->first) == active.end()) {
+        checkpoints_.cancel(it->first);
         bev::removeCheckpoint(store_, it->first);
         it = checkpointed_.erase(it);
       } else {
@@ -221,19 +225,21 @@ class BevBuilderApp {
       }
     }
     if (!open) return;
-    try {
-      bev::storeCheckpoint(store_, *open, last_projected_utime_);
-      checkpointed_[open->road_id] = open->grid.frames();
-      const auto us = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - now).count();
-      auto& c = process_.counters();
-      c.add("checkpoints_written");
-      c.add("checkpoint_us_total", us);
-      c.set("checkpoint_us_max", std::max<int64_t>(c.get("checkpoint_us_max"), us));
-      c.set("checkpoint_kb", static_cast<int64_t>(open->grid.memoryBytes() / 1024));
-    } catch (const std::exception& e) {
-      process_.counters().add("checkpoints_failed");
-      std::cerr << "bev_builder: checkpoint of road " << open->road_id << ": " << e.what() << "\n";
-    }
+    checkpointed_[open->road_id] = open->grid.frames();
+    checkpoints_.write(std::move(*open), last_projected_utime_);  // written in the writer's thread
+  }
+
+  // The checkpoint writer's figures and errors, into STATUS and stderr.
+  void checkpointCounters() {
+    for (const auto& e : checkpoints_.takeErrors()) std::cerr << "bev_builder: checkpoint of " << e << "\n";
+    const auto s = checkpoints_.stats();
+    auto& c = process_.counters();
+    c.set("checkpoints_written", s.written);
+    c.set("checkpoints_failed", s.failed);
+    c.set("checkpoints_replaced", s.replaced);
+    c.set("checkpoint_us_total", s.us_total);
+    c.set("checkpoint_us_max", s.us_max);
+    c.set("checkpoint_kb", s.kb);
   }
 
   void publishPreview() {
@@ -275,6 +281,7 @@ class BevBuilderApp {
   void writeClosed() {
     for (auto& road : builder_.takeClosed()) {
       try {
+        checkpoints_.cancel(road.road_id);  // no older checkpoint may land after the road is stored
         const auto stored = bev::storeRoad(store_, road);
         publish(road, stored);
         bev::removeCheckpoint(store_, road.road_id);  // after the road is stored: a crash between keeps both
@@ -304,6 +311,7 @@ class BevBuilderApp {
     const auto* road = skeleton_->road(open->road_id);
     if (!road) return;
     try {
+      checkpoints_.cancel(open->road_id);
       const lanes::ExplorerOptions& frame = road_frame_;  // the station in the explorer's frame of the road
       const auto stored = bev::storePartialRoad(store_, *open, mapping::roadStation(*road, *last_position_, frame),
                                                 mapping::roadFrameLength(*road, frame));
@@ -337,6 +345,7 @@ class BevBuilderApp {
   }
 
   void updateCounters() {
+    checkpointCounters();
     const auto s = builder_.stats();
     auto& c = process_.counters();
     c.set("frames_received", s.frames_received);
@@ -385,11 +394,12 @@ class BevBuilderApp {
   double checkpoint_period_s_ = 2.0;
   lanes::ExplorerOptions road_frame_;  // only its frame_spacing_m / frame_smoothing_m are used
   std::chrono::steady_clock::time_point last_checkpoint_{};
-  std::map<int64_t, int> checkpointed_;   // road -> frames in its checkpoint on disk
+  std::map<int64_t, int> checkpointed_;   // road -> frames in its checkpoint (on disk or queued)
   int64_t last_projected_utime_ = 0;
   int64_t last_label_seq_ = -1, labels_received_ = 0;
   int64_t recovered_frame_utime_ = 0;     // newest frame of the recovered checkpoints, until a frame comes
   std::optional<Eigen::Vector2d> last_position_;  // the newest pose (ENU), where a partial road stops
+  bev::CheckpointWriter checkpoints_;     // after store_ (it takes it); its thread ends first
 };
 
 }  // namespace lanemap::bev_builder_app

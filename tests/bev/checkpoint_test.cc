@@ -3,6 +3,7 @@
 // mid-road carries on from.
 #include "core/bev/bev_builder.h"
 #include "core/bev/bev_store.h"
+#include "core/bev/checkpoint_writer.h"
 #include "core/bev/road_bev.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
@@ -10,8 +11,10 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <future>
 
 namespace {
 
@@ -94,3 +97,69 @@ TEST(Checkpoint, ARestoredRoadIsActiveAgainAndGoesOnCollecting) {
 }
 
 }  // namespace
+
+// The BEV builder's checkpoints are written in a thread of their own (issue 17: frames waited
+// behind each fsync). What the store's crash rules need of it: the caller never waits for a write,
+// the newest asked content lands, and after cancel(road) no older checkpoint of that road lands
+// (it would make a stored road look open to the next start).
+TEST(CheckpointWriter, WritesInItsOwnThreadAndCancelIsABarrier) {
+  const auto sk = skeleton::Skeleton::build(osm::readOsm(std::string(LANEMAP_DATA_DIR) + "/osm/west-oakland.osm"));
+  lt::TempDir store("checkpoint_writer");
+  const int64_t a = sk.roads()[0].id, b = sk.roads()[1].id;
+  std::promise<void> entered, release;
+  std::shared_future<void> released = release.get_future().share();
+  bool first = true;
+  auto writer = std::make_unique<bev::CheckpointWriter>(store.str());
+  writer->setBeforeWriteHook([&](int64_t) {
+    if (!first) return;
+    first = false;
+    entered.set_value();
+    released.wait();  // the first write blocks, as a slow disk would
+  });
+  writer->write(roadWithEvidence(sk, a, 5), 5);
+  entered.get_future().wait();  // the writer is inside road a's first write
+  // The caller goes on while the writer is stuck: these return at once (a deadlock otherwise).
+  auto asked = std::async(std::launch::async, [&] {
+    writer->write(roadWithEvidence(sk, a, 6), 6);
+    writer->write(roadWithEvidence(sk, b, 3), 3);
+    writer->write(roadWithEvidence(sk, a, 7), 7);  // replaces the waiting write of a (6 frames)
+    writer->write(roadWithEvidence(sk, b, 4), 4);  // and of b
+  });
+  ASSERT_EQ(asked.wait_for(std::chrono::seconds(20)), std::future_status::ready);
+  EXPECT_EQ(writer->stats().written, 0);
+  EXPECT_EQ(writer->stats().replaced, 2);
+  // cancel(a) drops a's waiting write and waits for the one in progress: it cannot return before
+  // the write is released.
+  auto cancelled = std::async(std::launch::async, [&] { writer->cancel(a); });
+  EXPECT_EQ(cancelled.wait_for(std::chrono::milliseconds(200)), std::future_status::timeout);
+  release.set_value();
+  ASSERT_EQ(cancelled.wait_for(std::chrono::seconds(20)), std::future_status::ready);
+  // Road a is now stored and its checkpoint removed, as the BEV builder does when a road closes.
+  EXPECT_TRUE(bev::removeCheckpoint(store.str(), a));
+  writer->drain();
+  const auto loaded = bev::loadCheckpoints(store.str());
+  ASSERT_EQ(loaded.size(), 1u);  // a's queued 7-frame write never landed after the removal
+  EXPECT_EQ(loaded[0].road_id, b);
+  EXPECT_EQ(loaded[0].grid.frames(), 4);  // the newest asked
+  EXPECT_EQ(loaded[0].last_frame_utime, 4);
+  const auto s = writer->stats();
+  EXPECT_EQ(s.written, 2);  // a's first, b's newest
+  EXPECT_EQ(s.failed, 0);
+  EXPECT_GT(s.kb, 0);
+  // A write that fails (the store's folder is a file now) is counted and named, not thrown.
+  lt::TempDir bad("checkpoint_writer_bad");
+  { std::ofstream(bad.str("bev")) << "a file where the folder should be"; }
+  bev::CheckpointWriter failing(bad.str());
+  failing.write(roadWithEvidence(sk, a, 1), 1);
+  failing.drain();
+  EXPECT_EQ(failing.stats().failed, 1);
+  const auto errors = failing.takeErrors();
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("road " + std::to_string(a)), std::string::npos) << errors[0];
+  // The destructor writes what is still waiting.
+  writer->write(roadWithEvidence(sk, b, 9), 9);
+  writer.reset();
+  const auto after = bev::loadCheckpoints(store.str());
+  ASSERT_EQ(after.size(), 1u);
+  EXPECT_EQ(after[0].grid.frames(), 9);
+}

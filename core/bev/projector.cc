@@ -297,6 +297,10 @@ void Projector::rasterise(const ground::MeshGround& mesh, const Eigen::Isometry3
       y1 = std::min(y1, std::max({va.q.y(), vb.q.y(), vc.q.y()}));
       if (x0 > x1 || y0 > y1) continue;
     }
+    // No lattice row in the triangle's y range (most far triangles fall between rows): nothing to do.
+    const int r_first =
+        static_cast<int>(std::lower_bound(row_qy_hi_max_.begin(), row_qy_hi_max_.end(), y0) - row_qy_hi_max_.begin());
+    if (r_first >= nr || row_qy_lo_min_[r_first] > y1) continue;
     std::array<Eigen::Vector3f, 3> l{B.cross(C), C.cross(A), A.cross(B)};
     const float det = A.dot(l[0]);
     // A plane through the optical centre: rays meet it edge-on or not at all.
@@ -442,7 +446,7 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
   const Eigen::Matrix3f r_cv = camera_.vehicleToCamera().linear().cast<float>();
   for (const auto& [i, bits] : px) {
     const Ray& ray = rays_[i];
-    Eigen::Vector3d p = vehicle_to_enu * ray.flat_hit.cast<double>();
+    Eigen::Vector2d p;  // the pixel's ground point (ENU x, y)
     if (mesh) {
       const Eigen::Vector3d d = rot * ray.dir.cast<double>();
       // Range limit on t: horizontal distance t |d_xy| <= max_range_m (squared here; the ray cast
@@ -491,15 +495,18 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
         ++splat.raycast;
       }
       if (t) {
-        p = c + *t * d;
+        p = c.head<2>() + *t * d.head<2>();
         ++splat.mesh_hits;
-      } else if (mesh->covers(p.x(), p.y())) {
-        ++splat.dropped;
-        continue;
       } else {
+        p = (vehicle_to_enu * ray.flat_hit.cast<double>()).head<2>();  // the flat plane's point
+        if (mesh->covers(p.x(), p.y())) {
+          ++splat.dropped;
+          continue;
+        }
         ++splat.flat;
       }
     } else {
+      p = (vehicle_to_enu * ray.flat_hit.cast<double>()).head<2>();
       ++splat.flat;
     }
     const int cx = static_cast<int>(std::floor(p.x() / res)) - x0, cy = static_cast<int>(std::floor(p.y() / res)) - y0;

@@ -331,8 +331,10 @@ void Projector::rasterise(const ground::MeshGround& mesh, const Eigen::Isometry3
                         o.y() != p.y() ? (o.x() - p.x()) / (o.y() - p.y()) : 0.0f};
       }
     }
-    // Rows whose y range meets [y0, y1].
-    int r = static_cast<int>(std::lower_bound(row_qy_hi_max_.begin(), row_qy_hi_max_.end(), y0) - row_qy_hi_max_.begin());
+    // Rows whose y range meets [y0, y1] (r_first unless clippedBox raised y0).
+    int r = front ? r_first
+                  : static_cast<int>(std::lower_bound(row_qy_hi_max_.begin(), row_qy_hi_max_.end(), y0) -
+                                     row_qy_hi_max_.begin());
     for (; r < nr && row_qy_lo_min_[r] <= y1; ++r) {
       const RasterRow& row = raster_rows_[r];
       if (row.qy_hi < y0 || row.qy_lo > y1) continue;

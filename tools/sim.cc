@@ -45,6 +45,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <optional>
 #include <iostream>
 #include <sstream>
@@ -136,6 +137,45 @@ std::vector<int64_t> parseRoute(const std::string& text) {
 }
 
 }  // namespace
+
+// groundtruth.osm (Lanelet2, with stop signs, give way and traffic lights from the OSM's control
+// nodes), roads.osm and groundtruth.png into `dir`; returns the lanelets Lanelet2 would misread.
+std::vector<std::string> writeTruthFiles(const sim::SimWorld& world, const skeleton::Skeleton& sk,
+                                         const osm::OsmData& osm_data, const std::string& osm_path,
+                                         bool keep_lane_tags, const fs::path& dir) {
+  // The truth is sampled densely; 1 cm Douglas-Peucker keeps its shape and cuts the file ~4x.
+  // The world builder shapes every lanelet so that Lanelet2's loader reads it as meant; a short
+  // lane piece ending in a bend tighter than the road is wide can still defeat its heuristic
+  // (Monaco: one lanelet of ~12,600 for 7 of 9 seeds tried; West Oakland: none): it is written
+  // as it is, named here and in scenario.json ("lanelet2_misread"), rather than failing the drive.
+  map::LaneMap truth_written = map::simplified(world.truth(), sim::kTruthSimplifyTolerance);
+  // Stop signs, give way and traffic lights at the truth's stop lines, from the OSM nodes.
+  // (A world from a Lanelet2 map has no OSM control nodes: its roads.osm is derived.)
+  const auto controls = osm_path.empty() ? decltype(intersections::readControlNodes(osm_path)){}
+                                         : intersections::readControlNodes(osm_path);
+  intersections::addRegulatoryElements(truth_written, sk, controls);
+  auto misread = io::orientationProblems(truth_written);
+  io::Lanelet2WriteOptions truth_options;
+  truth_options.check_orientation = misread.empty();
+  truth_options.speed_limit_kmh_by_road = io::speedLimitsKmh(sk);
+  io::writeLanelet2(truth_written, (dir / "groundtruth.osm").string(), truth_options);
+  io::RoadOsmOptions road_options;
+  road_options.keep_lane_tags = keep_lane_tags;
+  for (const auto& [id, c] : controls) {  // roads.osm keeps the junction controls for the mapper
+    road_options.node_tags[id]["highway"] = intersections::toString(c.control);
+    if (!c.direction.empty()) road_options.node_tags[id]["direction"] = c.direction;
+  }
+  io::writeRoadOsm(osm_data, (dir / "roads.osm").string(), road_options);
+  io::MapPngOptions png;
+  png.background_polylines = io::skeletonPolylines(sk);
+  if (osm_data.bounds.valid()) {  // the extract's area, not the far ends of ways leaving it
+    const auto& b = osm_data.bounds;
+    png.bbox = Eigen::AlignedBox2d(sk.frame().toEnu(b.min_lat, b.min_lon).head<2>(),
+                                   sk.frame().toEnu(b.max_lat, b.max_lon).head<2>());
+  }
+  io::writeMapPng(world.truth(), (dir / "groundtruth.png").string(), png);
+  return misread;
+}
 
 int main(int argc, char** argv) {
   CLI::App app(
@@ -287,39 +327,11 @@ int main(int argc, char** argv) {
     fs::remove_all(tmp);
     fs::create_directories(tmp);
 
-    // The truth is sampled densely; 1 cm Douglas-Peucker keeps its shape and cuts the file ~4x.
-    // The world builder shapes every lanelet so that Lanelet2's loader reads it as meant; a short
-    // lane piece ending in a bend tighter than the road is wide can still defeat its heuristic
-    // (Monaco: one lanelet of ~12,600 for 7 of 9 seeds tried; West Oakland: none): it is written
-    // as it is, named here and in scenario.json ("lanelet2_misread"), rather than failing the drive.
-    map::LaneMap truth_written = map::simplified(world->truth(), sim::kTruthSimplifyTolerance);
-    // Stop signs, give way and traffic lights at the truth's stop lines, from the OSM nodes.
-    // (A world from a Lanelet2 map has no OSM control nodes: its roads.osm is derived.)
-    const auto controls = osm_path.empty() ? decltype(intersections::readControlNodes(osm_path)){}
-                                           : intersections::readControlNodes(osm_path);
-    intersections::addRegulatoryElements(truth_written, sk, controls);
-    const auto misread = io::orientationProblems(truth_written);
-    for (const auto& m : misread) std::fprintf(stderr, "lanemap-sim: warning: %s\n", m.c_str());
-    io::Lanelet2WriteOptions truth_options;
-    truth_options.check_orientation = misread.empty();
-    truth_options.speed_limit_kmh_by_road = io::speedLimitsKmh(sk);
-    io::writeLanelet2(truth_written, (tmp / "groundtruth.osm").string(), truth_options);
-    io::RoadOsmOptions road_options;
-    road_options.keep_lane_tags = keep_lane_tags;
-    for (const auto& [id, c] : controls) {  // roads.osm keeps the junction controls for the mapper
-      road_options.node_tags[id]["highway"] = intersections::toString(c.control);
-      if (!c.direction.empty()) road_options.node_tags[id]["direction"] = c.direction;
-    }
-    io::writeRoadOsm(osm_data, (tmp / "roads.osm").string(), road_options);
-    io::MapPngOptions png;
-    png.background_polylines = io::skeletonPolylines(sk);
-    if (osm_data.bounds.valid()) {  // the extract's area, not the far ends of ways leaving it
-      const auto& b = osm_data.bounds;
-      png.bbox = Eigen::AlignedBox2d(sk.frame().toEnu(b.min_lat, b.min_lon).head<2>(),
-                                     sk.frame().toEnu(b.max_lat, b.max_lon).head<2>());
-    }
-    io::writeMapPng(world->truth(), (tmp / "groundtruth.png").string(), png);
-
+    // The truth files (a city's groundtruth.osm is some 150 MB) are written by a thread of their
+    // own while the drive is rendered; it only reads the world's truth and the skeleton.
+    auto truth_files = std::async(std::launch::async, [&] {
+      return writeTruthFiles(*world, sk, osm_data, osm_path, keep_lane_tags, tmp);
+    });
     sim::SimulatorOptions sim_options;
     sim_options.seed = seed;
     sim_options.camera_rate_hz = camera_hz;
@@ -352,6 +364,8 @@ int main(int argc, char** argv) {
       });
       if (!quiet) std::fprintf(stderr, "\n");
     }
+    const std::vector<std::string> misread = truth_files.get();
+    for (const auto& m : misread) std::fprintf(stderr, "lanemap-sim: warning: %s\n", m.c_str());
 
     struct DrivenRoad {
       int64_t road_id;

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -39,10 +40,18 @@ namespace {
 constexpr double kNodeMergeDistanceM = 0.0501;
 constexpr double kStraightTurnRad = 0.5236;    // turn_direction: heading change under 30 deg
 
-std::string formatDouble(const char* fmt, double v) {
+// v with `decimals` digits after the point, as printf's "%.Nf" writes it (std::to_chars with a
+// precision is specified so, in the C locale; it is several times faster than snprintf).
+void appendFixed(std::string& out, double v, int decimals) {
   char buf[64];
-  std::snprintf(buf, sizeof(buf), fmt, v);
-  return buf;
+  const auto r = std::to_chars(buf, buf + sizeof(buf), v, std::chars_format::fixed, decimals);
+  if (r.ec != std::errc()) throw std::runtime_error("Lanelet2 writer: cannot format a number");
+  out.append(buf, r.ptr);
+}
+std::string formatFixed(double v, int decimals) {
+  std::string s;
+  appendFixed(s, v, decimals);
+  return s;
 }
 
 struct OsmLineTags {
@@ -76,15 +85,17 @@ const char* turnTag(TurnDirection t) {
 // order of first use from `next_id` on.
 class NodeTable {
  public:
-  explicit NodeTable(int64_t first_id) : next_id_(first_id) {}
+  explicit NodeTable(int64_t first_id) : next_id_(first_id), slots_(1024) {}
 
+  // The first node, in the order of the 3x3 cells around p and then of insertion, closer than the
+  // merge distance; else a new one.
   int64_t idFor(const Eigen::Vector3d& p) {
     const int64_t cx = cellOf(p.x()), cy = cellOf(p.y());
     for (int64_t dx = -1; dx <= 1; ++dx) {
       for (int64_t dy = -1; dy <= 1; ++dy) {
-        const auto it = cells_.find(key(cx + dx, cy + dy));
-        if (it == cells_.end()) continue;
-        for (size_t index : it->second) {
+        const Slot* cell = find(cx + dx, cy + dy);
+        if (!cell) continue;
+        for (int64_t index = cell->head; index >= 0; index = next_[index]) {
           if ((points_[index] - p).norm() < kNodeMergeDistanceM) return ids_[index];
         }
       }
@@ -94,7 +105,15 @@ class NodeTable {
 
   // A node of its own for p, merged with none (a line shorter than the merge distance keeps 2).
   int64_t add(const Eigen::Vector3d& p) {
-    cells_[key(cellOf(p.x()), cellOf(p.y()))].push_back(points_.size());
+    const int64_t index = static_cast<int64_t>(points_.size());
+    Slot& cell = insert(cellOf(p.x()), cellOf(p.y()));
+    if (cell.head < 0) {
+      cell.head = index;
+    } else {
+      next_[cell.tail] = index;
+    }
+    cell.tail = index;
+    next_.push_back(-1);
     points_.push_back(p);
     ids_.push_back(next_id_);
     return next_id_++;
@@ -105,12 +124,57 @@ class NodeTable {
   const Eigen::Vector3d& point(size_t i) const { return points_[i]; }
 
  private:
+  // A cell of the grid (cell size = merge distance) and its points as a list through next_, in
+  // insertion order. The cells live in an open-addressing table (linear probing, at most half
+  // full): a lookup is one or two cache lines, where a node-based map took several.
+  struct Slot {
+    int64_t cx = 0, cy = 0;
+    int64_t head = -1, tail = -1;  // head < 0: an empty slot
+  };
   static int64_t cellOf(double v) { return static_cast<int64_t>(std::floor(v / kNodeMergeDistanceM)); }
-  static uint64_t key(int64_t cx, int64_t cy) {
-    return (static_cast<uint64_t>(cx) * 0x9E3779B97F4A7C15ull) ^ static_cast<uint64_t>(cy);
+  static uint64_t hashOf(int64_t cx, int64_t cy) {
+    uint64_t h = static_cast<uint64_t>(cx) * 0x9E3779B97F4A7C15ull ^ (static_cast<uint64_t>(cy) + 0x632BE59BD9B4E019ull);
+    h ^= h >> 29;
+    h *= 0xBF58476D1CE4E5B9ull;
+    return h ^ (h >> 32);
+  }
+  const Slot* find(int64_t cx, int64_t cy) const {
+    const size_t mask = slots_.size() - 1;
+    for (size_t i = hashOf(cx, cy) & mask;; i = (i + 1) & mask) {
+      const Slot& s = slots_[i];
+      if (s.head < 0) return nullptr;
+      if (s.cx == cx && s.cy == cy) return &s;
+    }
+  }
+  Slot& insert(int64_t cx, int64_t cy) {
+    if (2 * (used_ + 1) > slots_.size()) grow();
+    const size_t mask = slots_.size() - 1;
+    for (size_t i = hashOf(cx, cy) & mask;; i = (i + 1) & mask) {
+      Slot& s = slots_[i];
+      if (s.head < 0) {
+        ++used_;
+        s.cx = cx;
+        s.cy = cy;
+        return s;  // the caller links its first point
+      }
+      if (s.cx == cx && s.cy == cy) return s;
+    }
+  }
+  void grow() {
+    std::vector<Slot> old(slots_.size() * 2);
+    old.swap(slots_);
+    const size_t mask = slots_.size() - 1;
+    for (const Slot& s : old) {
+      if (s.head < 0) continue;
+      size_t i = hashOf(s.cx, s.cy) & mask;
+      while (slots_[i].head >= 0) i = (i + 1) & mask;
+      slots_[i] = s;
+    }
   }
   int64_t next_id_;
-  std::unordered_map<uint64_t, std::vector<size_t>> cells_;
+  std::vector<Slot> slots_;  // size a power of 2
+  size_t used_ = 0;
+  std::vector<int64_t> next_;  // the next point of the same cell, -1 at its end
   std::vector<Eigen::Vector3d> points_;
   std::vector<int64_t> ids_;
 };
@@ -236,7 +300,11 @@ std::vector<int64_t> wayNodes(NodeTable& nodes, const std::vector<Eigen::Vector3
 void appendWay(std::string& out, int64_t id, const std::vector<int64_t>& refs,
                const std::vector<std::pair<std::string, std::string>>& tags) {
   out += "  <way id=\"" + std::to_string(id) + "\" version=\"1\" visible=\"true\">\n";
-  for (int64_t r : refs) out += "    <nd ref=\"" + std::to_string(r) + "\"/>\n";
+  for (int64_t r : refs) {
+    out += "    <nd ref=\"";
+    out += std::to_string(r);
+    out += "\"/>\n";
+  }
   for (const auto& [k, v] : tags) appendTag(out, k, v);
   out += "  </way>\n";
 }
@@ -417,7 +485,7 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
     if (it == light_way.end()) continue;
     // Lanelet2/Autoware: the light's bottom edge, `height` the light's own height.
     appendWay(ways_xml, it->second, wayNodes(nodes, r.light),
-              {{"type", "traffic_light"}, {"subtype", "red_yellow_green"}, {"height", formatDouble("%.2f", r.light_height_m)}});
+              {{"type", "traffic_light"}, {"subtype", "red_yellow_green"}, {"height", formatFixed(r.light_height_m, 2)}});
   }
   for (const auto& c : map.crosswalks) {
     const CrosswalkIds& w = crosswalk_ids.at(c.id);
@@ -567,14 +635,22 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
   for (size_t i = 0; i < nodes.size(); ++i) {
     const Eigen::Vector3d& p = nodes.point(i);
     const geo::LatLonAlt ll = enuToLatLonEle(frame, p);
-    out += "  <node id=\"" + std::to_string(nodes.id(i)) + "\" version=\"1\" visible=\"true\" lat=\"" +
-           formatDouble("%.10f", ll.lat) + "\" lon=\"" + formatDouble("%.10f", ll.lon) + "\">\n";
-    appendTag(out, "ele", formatDouble("%.4f", ll.alt));
+    // Appended piece by piece (a million nodes in a city's truth): the same text as appendTag's.
+    out += "  <node id=\"";
+    out += std::to_string(nodes.id(i));
+    out += "\" version=\"1\" visible=\"true\" lat=\"";
+    appendFixed(out, ll.lat, 10);
+    out += "\" lon=\"";
+    appendFixed(out, ll.lon, 10);
+    out += "\">\n    <tag k=\"ele\" v=\"";
+    appendFixed(out, ll.alt, 4);
     if (options.local_xy_tags) {
-      appendTag(out, "local_x", formatDouble("%.4f", p.x()));
-      appendTag(out, "local_y", formatDouble("%.4f", p.y()));
+      out += "\"/>\n    <tag k=\"local_x\" v=\"";
+      appendFixed(out, p.x(), 4);
+      out += "\"/>\n    <tag k=\"local_y\" v=\"";
+      appendFixed(out, p.y(), 4);
     }
-    out += "  </node>\n";
+    out += "\"/>\n  </node>\n";
     local_xy.push_back(roundTo(p.x(), 1e-4));
     local_xy.push_back(roundTo(p.y(), 1e-4));
   }
@@ -609,9 +685,9 @@ std::string autowareProjectorInfo(const LaneMap& map) {
          "projector_type: LocalCartesian\n"
          "vertical_datum: WGS84\n"
          "map_origin:\n"
-         "  latitude: " + formatDouble("%.10f", map.origin_lat) + "\n"
-         "  longitude: " + formatDouble("%.10f", map.origin_lon) + "\n"
-         "  altitude: " + formatDouble("%.4f", map.origin_alt) + "\n";
+         "  latitude: " + formatFixed(map.origin_lat, 10) + "\n"
+         "  longitude: " + formatFixed(map.origin_lon, 10) + "\n"
+         "  altitude: " + formatFixed(map.origin_alt, 4) + "\n";
 }
 
 void writeLanelet2(const LaneMap& map, const std::string& path, const Lanelet2WriteOptions& options) {

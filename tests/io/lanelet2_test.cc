@@ -992,6 +992,34 @@ TEST(Lanelet2, PointsCloserThan5cmAreOneNode) {
   }
 }
 
+// The node table grows far past its first size (thousands of cells, negative coordinates too) and
+// still finds every point within 5.01 cm of a node, in any of the 3x3 cells around it.
+TEST(Lanelet2, ManyPointsStillMergeAfterTheNodeTableGrows) {
+  LaneMap m = handMadeMap();
+  std::vector<Eigen::Vector3d> a, b;
+  for (int i = 0; i < 3000; ++i) {
+    const Eigen::Vector3d p(-150.0 + 0.1 * i, -40.0 + 0.013 * i, 0.0);  // 10 cm apart: all distinct
+    a.push_back(p);
+    // 3 cm off a's point, the offset's direction turning: the neighbour cell differs from point to point.
+    const double angle = 0.37 * i;
+    b.push_back(p + 0.03 * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0));
+  }
+  m.lines.push_back(line(31, LineType::kSolid, a));
+  m.lines.push_back(line(32, LineType::kSolid, b));
+  const std::string path = tempPath("many.osm");
+  writeLanelet2(m, path);
+  const FileStats s = statsOf(path);
+  ASSERT_EQ(s.way_nodes.at(31).size(), 3000u);
+  EXPECT_EQ(std::set<int64_t>(s.way_nodes.at(31).begin(), s.way_nodes.at(31).end()).size(), 3000u);
+  EXPECT_EQ(s.way_nodes.at(32), s.way_nodes.at(31));  // every point of b is a's node
+  // The read-back points are a's, to the written precision.
+  Lanelet2ReadOptions same_origin;
+  same_origin.origin_alt = m.origin_alt;
+  const LaneMap back = readLanelet2(path, m.origin_lat, m.origin_lon, same_origin);
+  ASSERT_NE(back.line(32), nullptr);
+  EXPECT_LT(maxPointDistance(back.line(32)->points, a), 1e-3);
+}
+
 TEST(Lanelet2, ParsesOsmMaxspeed) {
   EXPECT_DOUBLE_EQ(*parseMaxspeedKmh("50"), 50.0);
   EXPECT_DOUBLE_EQ(*parseMaxspeedKmh("50 km/h"), 50.0);

@@ -3,7 +3,9 @@
 # /usr/bin/time, printed beside its baseline, the drive's own duration (real time): wall and CPU
 # seconds and the ratio drive / wall ("x real time"; issue 17's target: >= 4x on 2 cores). The
 # fixed start-up (OSM, world, truth files) is timed on a 0.1 s drive and taken off for the
-# "rendering only" line. Figures only, no thresholds.
+# "rendering only" line (the truth files are written by a thread of their own while the drive is
+# rendered: on a long drive that part of the start-up is inside the rendering figure, on the 0.1 s
+# drive it is most of the start-up's second half). Figures only, no thresholds.
 #
 #   tools/bench/sim_speed.sh BUILD_DIR [--duration S (60)] [--threads N (the cores)] [--osm FILE]
 set -euo pipefail

@@ -292,7 +292,7 @@ int main(int argc, char** argv) {
       osm_data = osm::readOsm(osm_path);
       const auto map = config::MapConfig::fromYamlFile(map_path);
       sk_ptr = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(osm_data, map.skeleton));
-      world = sim::buildWorld(*sk_ptr, world_options);
+      world = sim::buildWorld(*sk_ptr, world_options, osm_data.restrictions);
     }
     const skeleton::Skeleton& sk = *sk_ptr;
     const YAML::Node drive_config = loadYamlFile(drive_path);
@@ -433,6 +433,8 @@ int main(int argc, char** argv) {
     }
     scenario["route"] = route;
     scenario["lanelet2_misread"] = misread;
+    // Turns an OSM turn restriction forbids (the truth has no lanelet for them).
+    scenario["turns_restricted"] = world->stats().turns_restricted;
     scenario["planned_route"] = plan.roads;
     scenario["counts"] = {{"poses", counts.poses}, {"camera_frames", counts.camera_frames},
                           {"lidar_sweeps", counts.lidar_sweeps}, {"lidar_packets", counts.lidar_packets}};

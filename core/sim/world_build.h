@@ -177,7 +177,8 @@ struct ZoneSeg {
 
 class Builder {
  public:
-  Builder(const skeleton::Skeleton& sk, const WorldOptions& o) : sk_(sk), o_(o), m_(o.right_hand_traffic ? 1.0 : -1.0) {
+  Builder(const skeleton::Skeleton& sk, const WorldOptions& o, const std::vector<osm::Restriction>& restrictions)
+      : sk_(sk), o_(o), restrictions_(restrictions), m_(o.right_hand_traffic ? 1.0 : -1.0) {
     impl_ = std::make_unique<SimWorld::Impl>();
     impl_->options = o;
     impl_->right_hand = o.right_hand_traffic;
@@ -298,6 +299,7 @@ class Builder {
   }
 
   void buildIntersection(const skeleton::Intersection& in);
+  bool turnRestricted(const Approach& a, const Approach& d) const;
 
   // (incoming lane, outgoing lane) pairs for one movement (METHOD.md 5 + our rules): straight k->k
   // from the left over lanes that may go straight; left turns from the left-most lane(s), right
@@ -407,6 +409,7 @@ class Builder {
   static constexpr double kZoneCell = 25.0;
   const skeleton::Skeleton& sk_;
   WorldOptions o_;
+  const std::vector<osm::Restriction>& restrictions_;
   double m_;  // +1 right-hand traffic, -1 mirrored
   std::unique_ptr<SimWorld::Impl> impl_;
   int64_t next_id_ = 1;

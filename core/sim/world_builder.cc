@@ -47,9 +47,10 @@ void Builder::fillStats() {
 
 }  // namespace world_build
 
-std::unique_ptr<SimWorld> buildWorld(const skeleton::Skeleton& skeleton, const WorldOptions& options) {
+std::unique_ptr<SimWorld> buildWorld(const skeleton::Skeleton& skeleton, const WorldOptions& options,
+                                     const std::vector<osm::Restriction>& restrictions) {
   options.validate();
-  world_build::Builder b(skeleton, options);
+  world_build::Builder b(skeleton, options, restrictions);
   return std::make_unique<SimWorld>(b.run());
 }
 

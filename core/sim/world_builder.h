@@ -9,6 +9,7 @@
 #pragma once
 
 #include "core/map/lane_map.h"
+#include "core/osm/osm_data.h"
 #include "core/sim/world.h"
 #include "core/skeleton/skeleton.h"
 
@@ -109,6 +110,7 @@ struct WorldStats {
   size_t road_lanelets = 0;
   size_t intersection_lanelets = 0;
   size_t connections_not_built = 0;  // Lanelet2 would misread them (see world_builder.cc connect)
+  size_t turns_restricted = 0;       // road-to-road turns an OSM turn restriction forbids: not built
   size_t lines = 0;
   size_t parking_lanes = 0, bike_lanes = 0, bus_bays = 0, turn_pockets = 0;
   size_t crosswalks = 0, stop_lines = 0, faded = 0, missing = 0;
@@ -152,6 +154,9 @@ class SimWorld : public World {
 };
 
 // Throws WorldConfigError on bad options, std::runtime_error if the skeleton has no road.
-std::unique_ptr<SimWorld> buildWorld(const skeleton::Skeleton& skeleton, const WorldOptions& options);
+// `restrictions` (the OSM file's type=restriction relations): the truth builds no turn they forbid
+// at the junction node they name (world_junctions.cc turnRestricted).
+std::unique_ptr<SimWorld> buildWorld(const skeleton::Skeleton& skeleton, const WorldOptions& options,
+                                     const std::vector<osm::Restriction>& restrictions = {});
 
 }  // namespace lanemap::sim

@@ -17,6 +17,10 @@ void Builder::buildIntersection(const skeleton::Intersection& in) {
     double best_dot = -2.0;
     for (const Approach& d : outs) {
       if (a.lanes.empty() || d.lanes.empty() || isUturn(a, d)) continue;
+      if (turnRestricted(a, d)) {
+        ++impl_->stats.turns_restricted;
+        continue;
+      }
       const Vector2d tin = a.lanes.front().tangent, tout = d.lanes.front().tangent;
       if (tin.dot(tout) > best_dot) {
         best_dot = tin.dot(tout);
@@ -44,6 +48,26 @@ void Builder::buildIntersection(const skeleton::Intersection& in) {
     }
   }
   zones_circles_.push_back({in.centre, radius});
+}
+
+// An OSM turn restriction at the junction node where road a ends and road d starts (the via node):
+// no_* forbids a -> d when a lies on its from way and d on its to way; only_* forbids every road
+// out of that node but the one on its to way. A restriction whose via node is not where a ends, or
+// whose turn passes other junction nodes of a merged intersection (d starts elsewhere), is not
+// applied: the truth then keeps the turn. Only the OSM data is read here, not the mapper's rules.
+bool Builder::turnRestricted(const Approach& a, const Approach& d) const {
+  if (restrictions_.empty()) return false;
+  const skeleton::AtomicRoad* ra = sk_.road(a.road_id);
+  const skeleton::AtomicRoad* rd = sk_.road(d.road_id);
+  if (!ra || !rd || ra->osm_nodes.empty() || rd->osm_nodes.empty()) return false;
+  const int64_t via = ra->osm_nodes.back();
+  if (rd->osm_nodes.front() != via) return false;
+  for (const auto& r : restrictions_) {
+    if (r.via_node != via || r.from_way != ra->way_id) continue;
+    if (r.restriction.rfind("no_", 0) == 0 && r.to_way == rd->way_id) return true;
+    if (r.restriction.rfind("only_", 0) == 0 && r.to_way != rd->way_id) return true;
+  }
+  return false;
 }
 
 std::vector<std::pair<int, int>> Builder::pairLanes(const Approach& a, const Approach& d, TurnDirection turn) const {

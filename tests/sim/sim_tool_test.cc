@@ -65,7 +65,7 @@ class SimDrive : public ::testing::Test {
     d.sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(d.osm));
     auto wopt = sim::WorldOptions::fromYaml(loadYamlFile(std::string(LANEMAP_SOURCE_DIR) + "/config/sim_world.yaml"));
     wopt.seed = kSeed;
-    d.world = sim::buildWorld(*d.sk, wopt);
+    d.world = sim::buildWorld(*d.sk, wopt, d.osm.restrictions);  // as lanemap-sim builds it
     d.drive = sim::DriveOptions::fromYaml(loadYamlFile(std::string(LANEMAP_SOURCE_DIR) + "/config/sim_drive.yaml")["drive"]);
     d.drive.seed = kSeed;
     d.drive.duration_s = kDuration;

@@ -2,6 +2,7 @@
 // files, the channels and their rates, determinism, and the simulator's geometry: truth labels
 // where the true lane projects into the image, LIDAR ground returns on the true surface.
 #include "core/camera/camera_model.h"
+#include "core/config/map_config.h"
 #include "core/io/lanelet2.h"
 #include "core/lidar/velodyne.h"
 #include "core/osm/osm_data.h"
@@ -377,6 +378,37 @@ TEST_F(SimDrive, SimulatorEmitsTheSameBytesInTheSameOrderOnOneThreadAndOnFour) {
   ASSERT_GE(frames.size(), 2u);
   EXPECT_NE(frames.front(), frames.back());
   EXPECT_GT(frames.front().size(), 20000u);
+}
+
+// The truth of a network with OSM turn restrictions (Kingsway: dual carriageways meeting) has no
+// lanelet for a forbidden turn: lanemap-sim builds its world with the file's restrictions, as the
+// same world rebuilt in-process with them, and fewer intersection lanelets than without them.
+TEST(SimTool, TruthLeavesOutTheTurnsTheOsmRestrictionsForbid) {
+  TempDir dir("simrestr");
+  const std::string osm_path = dataPath("osm/dev/kingsway_junction.osm");
+  const auto r = runCommand(binPath("lanemap-sim") + " -q --no-lidar --osm " + osm_path + " --out " + dir.str("out") +
+                            " --duration 1 --seed 1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto scenario = nlohmann::json::parse(std::ifstream(dir.str("out") + "/scenario.json"));
+  const osm::OsmData data = osm::readOsm(osm_path);
+  ASSERT_FALSE(data.restrictions.empty());
+  const skeleton::Skeleton sk = skeleton::Skeleton::build(
+      data, config::MapConfig::fromYamlFile(std::string(LANEMAP_SOURCE_DIR) + "/config/map.yaml").skeleton);
+  auto wopt = sim::WorldOptions::fromYaml(loadYamlFile(std::string(LANEMAP_SOURCE_DIR) + "/config/sim_world.yaml"));
+  wopt.seed = 1;
+  const auto with = sim::buildWorld(sk, wopt, data.restrictions);
+  const auto without = sim::buildWorld(sk, wopt);
+  EXPECT_GT(with->stats().turns_restricted, 0u);
+  EXPECT_EQ(scenario.at("turns_restricted").get<size_t>(), with->stats().turns_restricted);
+  EXPECT_EQ(without->stats().turns_restricted, 0u);
+  const auto intersectionLanelets = [](const map::LaneMap& m) {
+    return std::count_if(m.lanelets.begin(), m.lanelets.end(),
+                         [](const map::Lanelet& l) { return l.kind == map::LaneletKind::kIntersection; });
+  };
+  const auto written = io::readLanelet2(dir.str("out") + "/groundtruth.osm", with->truth().origin_lat,
+                                        with->truth().origin_lon);
+  EXPECT_EQ(intersectionLanelets(written), intersectionLanelets(with->truth()));
+  EXPECT_LT(intersectionLanelets(with->truth()), intersectionLanelets(without->truth()));
 }
 
 // Bad input: a clear message, a non-zero exit, and nothing left behind.

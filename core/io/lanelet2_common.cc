@@ -31,7 +31,15 @@ std::string hex64(uint64_t v) {
 }
 
 std::string readAll(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  const std::streamoff size = in ? static_cast<std::streamoff>(in.tellg()) : -1;
+  if (size >= 0) {  // a file of known size: one read (a city's truth is some 150 MB)
+    std::string out(static_cast<size_t>(size), '\0');
+    in.seekg(0);
+    if (in.read(out.data(), size)) return out;
+  }
+  in.clear();
+  in.seekg(0);
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 

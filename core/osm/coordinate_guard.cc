@@ -1,29 +1,44 @@
 #include "core/osm/coordinate_guard.h"
 
 #include <fstream>
-#include <iterator>
+#include <vector>
 
 namespace lanemap::osm {
 
 std::string exponentCoordinate(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  std::istreambuf_iterator<char> it(in), end;
+  // Read in blocks (a city's Lanelet2 truth is some 150 MB; a character iterator took seconds);
+  // the lexer below keeps its state from one block to the next.
+  std::vector<char> block(1 << 20);
+  size_t pos = 0, len = 0;
+  const auto next = [&](char& c) {
+    if (pos == len) {
+      in.read(block.data(), static_cast<std::streamsize>(block.size()));
+      len = static_cast<size_t>(in.gcount());
+      pos = 0;
+      if (len == 0) return false;
+    }
+    c = block[pos++];
+    return true;
+  };
+  char c = 0;
   // The first non-blank byte: an XML file starts with '<'.
-  while (it != end && (*it == ' ' || *it == '\n' || *it == '\r' || *it == '\t')) ++it;
-  if (it == end || *it != '<') return "";
+  bool more = next(c);
+  while (more && (c == ' ' || c == '\n' || c == '\r' || c == '\t')) more = next(c);
+  if (!more || c != '<') return "";
   // A small lexer: inside a tag, outside quotes, the characters before '=' are an attribute's
   // name; the quoted value after it is checked when the name is lat or lon.
   bool in_tag = false;
   char quote = 0;
   std::string name, before_blank, named, value;  // named: the attribute the value belongs to
-  for (; it != end; ++it) {
-    const char c = *it;
+  bool coordinate = false;                       // named is lat or lon
+  for (; more; more = next(c)) {
     if (quote) {
       if (c == quote) {
         if (value.find_first_of("eE") != std::string::npos) return (named + "=\"" + value).substr(0, 40) + "\"";
         quote = 0;
         value.clear();
-      } else if ((named == "lat" || named == "lon") && value.size() < 64) {
+      } else if (coordinate && value.size() < 64) {
         value.push_back(c);
       }
       continue;
@@ -39,6 +54,7 @@ std::string exponentCoordinate(const std::string& path) {
       quote = c;
     } else if (c == '=') {
       named = name.empty() ? before_blank : name;  // lat = "..." is XML too
+      coordinate = named == "lat" || named == "lon";
       name.clear();
     } else if (c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '/') {
       if (!name.empty()) before_blank = name;

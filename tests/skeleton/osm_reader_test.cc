@@ -15,6 +15,7 @@
 //   osmium tags-filter -R -o - -f opl monaco.osm.pbf r/type=restriction | grep -c '^r'  -> 27,
 //   all 27 with a node as via; r3410831 = only_straight_on, from w92627431 via n273244852 to
 //   w254596488.
+#include "core/osm/coordinate_guard.h"
 #include "core/osm/osm_data.h"
 #include "tests/common/temp_dir.h"
 
@@ -215,6 +216,30 @@ TEST(ReadOsm, ACoordinateInExponentNotationIsRefusedBeforeLibosmiumReadsIt) {
   EXPECT_EQ(readOsm(dir.write("plain.osm", osmXml(good + road))).ways.size(), 1u);
   const std::string bad = "<node id=\"1\" lat=\"43.7\" lon=\"7.4e99999\"/><node id=\"2\" lat=\"43.71\" lon=\"7.41\"/>\n";
   expectOsmError(dir.write("exponent.osm", osmXml(bad + road)), {"exponent notation", "lon=\"7.4e99999\"", "exponent.osm"});
+}
+
+// The guard reads large files in 1 MiB blocks: a coordinate whose attribute name and value are cut
+// by a block's end is still found, and a file of a few MiB with none passes.
+TEST(ReadOsm, AnExponentCoordinateAcrossTheGuardsReadBlocksIsFound) {
+  TempDir dir("osm-reader");
+  constexpr size_t kBlock = 1 << 20;
+  std::string filler;
+  for (int i = 10; filler.size() < 3 * kBlock; ++i) {
+    filler += "<node id=\"" + std::to_string(i) + "\" lat=\"43.7\" lon=\"7.4\"/>\n";
+  }
+  const std::string head = "<?xml version=\"1.0\"?>\n<osm version=\"0.6\">\n";
+  const std::string clean = head + filler + "</osm>\n";
+  EXPECT_EQ(lanemap::osm::exponentCoordinate(dir.write("clean.osm", clean)), "");
+  for (const size_t cut : {2u, 5u, 9u}) {  // the block ends inside `lon`, at its '"', inside its value
+    const std::string bad = "<node id=\"2\" lon=\"7.4e5\" lat=\"43.7\"/>\n";
+    std::string text = head + filler.substr(0, filler.rfind('\n', kBlock - head.size() - 100) + 1);
+    // Blanks, so that "lon" starts `cut` bytes before the first block's end.
+    const size_t before_lon = std::string("<node id=\"2\" ").size();
+    text.append(kBlock - text.size() - before_lon - cut, ' ');
+    text += bad + filler.substr(0, kBlock) + "</osm>\n";
+    ASSERT_EQ(text.compare(kBlock - cut, 3, std::string("lon=\"7.4e5\"").substr(0, 3)), 0) << cut;
+    EXPECT_EQ(lanemap::osm::exponentCoordinate(dir.write("cut" + std::to_string(cut) + ".osm", text)), "lon=\"7.4e5\"") << cut;
+  }
 }
 
 TEST(ReadOsm, NoDrivableWayThrows) {

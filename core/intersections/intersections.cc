@@ -23,8 +23,6 @@ using map::TurnDirection;
 using geo::cross;  // core/geo/polyline.h
 using geo::unit;
 
-bool startsWith(const std::string& s, const std::string& prefix) { return s.rfind(prefix, 0) == 0; }
-
 // Closest point of a polyline: arc length and signed lateral offset (left positive).
 struct Projection {
   double s = 0.0, d = 0.0, distance = 0.0;
@@ -268,7 +266,7 @@ class Builder {
     std::set<int64_t> out;
     if (depth >= 3) return out;
     for (const auto& q : restrictions_) {
-      if (q.from_way != r.to_way || !viaHere(q.via_node) || !startsWith(q.restriction, "only_")) continue;
+      if (q.from_way != r.to_way || !viaHere(q.via_node) || !q.mandatory()) continue;
       const std::set<int64_t> w = onlyWaysOut(q, depth + 1);
       if (w.empty()) return {};  // one link leads on unrestricted: anywhere from there
       out.insert(w.begin(), w.end());
@@ -285,8 +283,8 @@ class Builder {
     bool only_applies = false, only_ok = false;
     for (const auto& r : restrictions_) {
       if (r.from_way != a.road->way_id || !viaHere(r.via_node)) continue;
-      const bool only = startsWith(r.restriction, "only_");
-      if (!only && !startsWith(r.restriction, "no_")) continue;
+      const bool only = r.mandatory();
+      if (!only && !r.prohibitive()) continue;
       if (!isWayOut(r.to_way)) {
         if (!only) continue;
         const std::set<int64_t> ways = onlyWaysOut(r);

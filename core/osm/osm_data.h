@@ -32,6 +32,8 @@ struct Restriction {  // type=restriction relation
   int64_t from_way = 0;
   int64_t via_node = 0;
   int64_t to_way = 0;
+  bool prohibitive() const { return restriction.rfind("no_", 0) == 0; }  // no_*: this turn is forbidden
+  bool mandatory() const { return restriction.rfind("only_", 0) == 0; }  // only_*: every other turn is
 };
 
 struct Bounds {

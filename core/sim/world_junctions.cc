@@ -64,8 +64,8 @@ bool Builder::turnRestricted(const Approach& a, const Approach& d) const {
   if (rd->osm_nodes.front() != via) return false;
   for (const auto& r : restrictions_) {
     if (r.via_node != via || r.from_way != ra->way_id) continue;
-    if (r.restriction.rfind("no_", 0) == 0 && r.to_way == rd->way_id) return true;
-    if (r.restriction.rfind("only_", 0) == 0 && r.to_way != rd->way_id) return true;
+    if (r.prohibitive() && r.to_way == rd->way_id) return true;
+    if (r.mandatory() && r.to_way != rd->way_id) return true;
   }
   return false;
 }

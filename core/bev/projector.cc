@@ -269,6 +269,10 @@ void Projector::rasterise(const ground::MeshGround& mesh, const Eigen::Isometry3
     }
   }
   const int nr = static_cast<int>(raster_rows_.size());
+  // The first lattice row whose y range reaches up to y or beyond (nr: none).
+  const auto firstRowReaching = [&](float y) {
+    return static_cast<int>(std::lower_bound(row_qy_hi_max_.begin(), row_qy_hi_max_.end(), y) - row_qy_hi_max_.begin());
+  };
   for (int32_t ti = 0; ti < static_cast<int32_t>(m.triangles.size()); ++ti) {
     const auto& t = m.triangles[ti];
     const Vert& va = vs[t[0]];
@@ -298,8 +302,7 @@ void Projector::rasterise(const ground::MeshGround& mesh, const Eigen::Isometry3
       if (x0 > x1 || y0 > y1) continue;
     }
     // No lattice row in the triangle's y range (most far triangles fall between rows): nothing to do.
-    const int r_first =
-        static_cast<int>(std::lower_bound(row_qy_hi_max_.begin(), row_qy_hi_max_.end(), y0) - row_qy_hi_max_.begin());
+    const int r_first = firstRowReaching(y0);
     if (r_first >= nr || row_qy_lo_min_[r_first] > y1) continue;
     std::array<Eigen::Vector3f, 3> l{B.cross(C), C.cross(A), A.cross(B)};
     const float det = A.dot(l[0]);
@@ -332,9 +335,7 @@ void Projector::rasterise(const ground::MeshGround& mesh, const Eigen::Isometry3
       }
     }
     // Rows whose y range meets [y0, y1] (r_first unless clippedBox raised y0).
-    int r = front ? r_first
-                  : static_cast<int>(std::lower_bound(row_qy_hi_max_.begin(), row_qy_hi_max_.end(), y0) -
-                                     row_qy_hi_max_.begin());
+    int r = front ? r_first : firstRowReaching(y0);
     for (; r < nr && row_qy_lo_min_[r] <= y1; ++r) {
       const RasterRow& row = raster_rows_[r];
       if (row.qy_hi < y0 || row.qy_lo > y1) continue;
@@ -446,6 +447,10 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
   MeshRaster mr;
   if (use_raster) rasterise(*mesh, vehicle_to_enu, mr);
   const Eigen::Matrix3f r_cv = camera_.vehicleToCamera().linear().cast<float>();
+  // A pixel's point on the flat ground plane (ENU x, y).
+  const auto flatPoint = [&](const Ray& ray) -> Eigen::Vector2d {
+    return (vehicle_to_enu * ray.flat_hit.cast<double>()).head<2>();
+  };
   for (const auto& [i, bits] : px) {
     const Ray& ray = rays_[i];
     Eigen::Vector2d p;  // the pixel's ground point (ENU x, y)
@@ -500,7 +505,7 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
         p = c.head<2>() + *t * d.head<2>();
         ++splat.mesh_hits;
       } else {
-        p = (vehicle_to_enu * ray.flat_hit.cast<double>()).head<2>();  // the flat plane's point
+        p = flatPoint(ray);
         if (mesh->covers(p.x(), p.y())) {
           ++splat.dropped;
           continue;
@@ -508,7 +513,7 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
         ++splat.flat;
       }
     } else {
-      p = (vehicle_to_enu * ray.flat_hit.cast<double>()).head<2>();
+      p = flatPoint(ray);
       ++splat.flat;
     }
     const int cx = static_cast<int>(std::floor(p.x() / res)) - x0, cy = static_cast<int>(std::floor(p.y() / res)) - y0;

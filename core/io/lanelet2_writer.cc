@@ -285,6 +285,16 @@ void appendTag(std::string& out, const std::string& k, const std::string& v) {
   out += "    <tag k=\"" + escapeXml(k) + "\" v=\"" + escapeXml(v) + "\"/>\n";
 }
 
+// appendTag of a number with `decimals` digits after the point (a key that needs no escaping),
+// without a temporary string: a city's truth has millions of them.
+void appendFixedTag(std::string& out, const char* k, double v, int decimals) {
+  out += "    <tag k=\"";
+  out += k;
+  out += "\" v=\"";
+  appendFixed(out, v, decimals);
+  out += "\"/>\n";
+}
+
 // A way's node ids, without consecutive repeats (points < 5 cm apart collapse into one node). A
 // line of 2 or more points keeps 2 nodes at least: its last point gets a node of its own.
 std::vector<int64_t> wayNodes(NodeTable& nodes, const std::vector<Eigen::Vector3d>& pts) {
@@ -635,22 +645,20 @@ Lanelet2Document toLanelet2Document(const LaneMap& map, const Lanelet2WriteOptio
   for (size_t i = 0; i < nodes.size(); ++i) {
     const Eigen::Vector3d& p = nodes.point(i);
     const geo::LatLonAlt ll = enuToLatLonEle(frame, p);
-    // Appended piece by piece (a million nodes in a city's truth): the same text as appendTag's.
+    // Appended piece by piece: a million nodes in a city's truth.
     out += "  <node id=\"";
     out += std::to_string(nodes.id(i));
     out += "\" version=\"1\" visible=\"true\" lat=\"";
     appendFixed(out, ll.lat, 10);
     out += "\" lon=\"";
     appendFixed(out, ll.lon, 10);
-    out += "\">\n    <tag k=\"ele\" v=\"";
-    appendFixed(out, ll.alt, 4);
+    out += "\">\n";
+    appendFixedTag(out, "ele", ll.alt, 4);
     if (options.local_xy_tags) {
-      out += "\"/>\n    <tag k=\"local_x\" v=\"";
-      appendFixed(out, p.x(), 4);
-      out += "\"/>\n    <tag k=\"local_y\" v=\"";
-      appendFixed(out, p.y(), 4);
+      appendFixedTag(out, "local_x", p.x(), 4);
+      appendFixedTag(out, "local_y", p.y(), 4);
     }
-    out += "\"/>\n  </node>\n";
+    out += "  </node>\n";
     local_xy.push_back(roundTo(p.x(), 1e-4));
     local_xy.push_back(roundTo(p.y(), 1e-4));
   }

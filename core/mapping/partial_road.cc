@@ -26,13 +26,17 @@ double roadFrameLength(const skeleton::AtomicRoad& road, const lanes::ExplorerOp
 lanes::RoadGeometry drivenStretch(const skeleton::AtomicRoad& road, double station_m, const lanes::ExplorerOptions& o) {
   lanes::RoadGeometry g = lanes::RoadGeometry::fromSkeleton(road);
   const double driven = std::min(station_m, g.s_end) - g.s_begin;
-  if (!(driven >= o.min_lane_length_m)) {
+  if (!(driven >= o.partial_min_driven_m)) {
     char buf[160];
     std::snprintf(buf, sizeof(buf), "road %lld: only %.1f m driven past its start intersection (under %.1f m): not mapped",
-                  static_cast<long long>(road.id), std::max(0.0, driven), o.min_lane_length_m);
+                  static_cast<long long>(road.id), std::max(0.0, driven), o.partial_min_driven_m);
     throw lanes::LanesError(buf);
   }
   g.s_end = std::min(g.s_end, station_m);
+  // A few metres driven: the camera saw them from the road (and ahead of the car), but exploring
+  // needs a stretch of short_road_min_m. Take it from behind the car, into the start ROI, where
+  // explorationStretch would centre it on the driven metres and run past where the car stopped.
+  if (g.s_end - g.s_begin < o.short_road_min_m) g.s_begin = std::max(0.0, g.s_end - o.short_road_min_m);
   return g;
 }
 

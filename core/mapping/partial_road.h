@@ -7,7 +7,9 @@
 //   and the explored lanes' s agree.
 // - The driven stretch: the road's own [s_begin, s_end] (explorer.h explorationStretch) ending at
 //   the station: the particles stop there, so no lane goes past where the car was (nothing is
-//   extrapolated). Under min_lane_length_m driven past s_begin there is nothing to map.
+//   extrapolated). Under partial_min_driven_m driven past s_begin there is nothing to map; under
+//   short_road_min_m, the stretch starts that far behind the station, inside the start ROI (a
+//   drive that ended just past a junction still gives the lanes the junction connects into).
 #pragma once
 
 #include "core/lanes/explorer.h"
@@ -26,8 +28,9 @@ double roadStation(const skeleton::AtomicRoad& road, const Eigen::Vector2d& p, c
 double roadFrameLength(const skeleton::AtomicRoad& road, const lanes::ExplorerOptions& options);
 
 // The road's geometry for exploring it as far as `station_m`: s_end = min(s_end, station_m).
-// Throws lanes::LanesError (naming the road and the metres driven) when under
-// options.min_lane_length_m of the road past s_begin was driven.
+// When under options.short_road_min_m was driven past s_begin, s_begin moves back to that far
+// before the station (not before 0). Throws lanes::LanesError (naming the road and the metres
+// driven) when under options.partial_min_driven_m of the road past s_begin was driven.
 lanes::RoadGeometry drivenStretch(const skeleton::AtomicRoad& road, double station_m, const lanes::ExplorerOptions& options);
 
 // Tags every road lanelet of `lanes` partial (station, road length); the explored lanes stop at

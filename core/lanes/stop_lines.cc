@@ -188,12 +188,16 @@ std::vector<map::Crosswalk> findCrosswalks(const bev::BevGrid& grid, const map::
       const double out_left = reach(pl, -across), out_right = reach(pr, across);
       hits.push_back({back, pl - out_left * across, pr + out_right * across, dir});
     }
-    // Runs of stations.
+    // Runs of stations, each without its end stations whose edge would be under min_edge_m.
+    const auto edgeOk = [&](const Station& h) { return (h.right - h.left).head<2>().norm() >= o.min_edge_m; };
     size_t i = 0;
     while (i < hits.size()) {
       size_t j = i;
       while (j + 1 < hits.size() && hits[j + 1].back - hits[j].back <= o.max_gap_m + 1e-9) ++j;
-      if (hits[j].back - hits[i].back >= o.min_depth_m) {
+      const size_t run_end = j;
+      while (i < j && !edgeOk(hits[i])) ++i;
+      while (j > i && !edgeOk(hits[j])) --j;
+      if (edgeOk(hits[i]) && hits[j].back - hits[i].back >= o.min_depth_m) {
         // Walking from the right curb to the left one, the edge further along the road is on the right.
         const Station& near = at_end ? hits[j] : hits[i];  // smaller arc length along the road
         const Station& far = at_end ? hits[i] : hits[j];
@@ -205,7 +209,7 @@ std::vector<map::Crosswalk> findCrosswalks(const bev::BevGrid& grid, const map::
         for (const auto* ll : lanes) c.crossing.push_back(ll->id);
         out.push_back(std::move(c));
       }
-      i = j + 1;
+      i = run_end + 1;
     }
   }
   return out;

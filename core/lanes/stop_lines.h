@@ -37,7 +37,9 @@ size_t addStopLines(const bev::BevGrid& grid, map::LaneMap& road_map, const Stop
 // observations; the stripes cover about half of a crossing). A run of such stations (gaps up to
 // `max_gap_m`) at least `min_depth_m` long is a crosswalk: its edges are the run's first and last
 // stations, reaching across the road's lanes and on beyond them as far as the paint goes (gaps
-// up to max_gap_m, at most `beyond_m`), so a crossing seen over both directions spans both.
+// up to max_gap_m, at most `beyond_m`), so a crossing seen over both directions spans both. A
+// run's end stations whose edge would be under `min_edge_m` long (a lane tapering to its end, no
+// paint beyond it) are left out of it: an edge millimetres long is Lanelet2's points_too_close.
 struct CrosswalkOptions {
   double search_m = 15.0;
   double step_m = 0.1;
@@ -47,6 +49,7 @@ struct CrosswalkOptions {
   double max_gap_m = 0.8;
   double min_depth_m = 1.5;
   double beyond_m = 10.0;
+  double min_edge_m = 1.0;
 };
 
 // The crosswalks found over one road's lanes (crossing = those lanes' lanelets), ids from `first_id`.

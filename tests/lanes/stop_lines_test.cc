@@ -147,6 +147,43 @@ TEST(Crosswalks, ZebraAtTheRoadsEndIsOneCrossingOverItsWholeWidth) {
   EXPECT_EQ(dup[0].crossing, (std::vector<int64_t>{10, 11, 77}));
 }
 
+// A lane tapering to its end (3.5 m wide to x = 38, 2 cm at x = 40), crossing paint over it from
+// x = 34 to its tip, none beyond it: the crossing's far edge is
+// where the lane is still min_edge_m (1 m) wide, not at the tip (lanelet2_validate's
+// points_too_close, seen on a fused West Oakland map: an edge of 9 mm).
+TEST(Crosswalks, ALaneTaperingToAPointGivesNoEdgeShorterThanMinEdge) {
+  Road r;
+  r.m = map::LaneMap();
+  map::LineString left, right;
+  left.id = 1;
+  right.id = 2;
+  for (const double x : {0.0, 10.0, 20.0, 30.0, 34.0, 38.0, 40.0}) {
+    left.points.emplace_back(x, x <= 38.0 ? 3.5 : 0.02, 0.0);
+    right.points.emplace_back(x, 0.0, 0.0);
+  }
+  map::Lanelet ll;
+  ll.id = 10;
+  ll.left_id = 1;
+  ll.right_id = 2;
+  for (size_t i = 0; i < left.points.size(); ++i) ll.centre.push_back(0.5 * (left.points[i] + right.points[i]));
+  r.m.lines = {left, right};
+  r.m.lanelets = {ll};
+  r.paint(33.0, 41.0, -1.0, 4.0, bev::Layer::kObserved, 5);
+  for (double x = 34.0; x < 40.0 - 1e-9; x += 0.1) {  // over the lane's cells, none beyond its left bound
+    const double w = x + 0.05 <= 38.0 ? 3.5 : 3.5 + (0.02 - 3.5) * (x + 0.05 - 38.0) / 2.0;
+    r.paint(x, x + 0.1, 0.0, w, bev::Layer::kCrosswalk, 4);
+  }
+  const auto found = findCrosswalks(r.grid, r.m, 1);
+  ASSERT_EQ(found.size(), 1u);
+  for (const auto* edge : {&found[0].left, &found[0].right}) {
+    ASSERT_EQ(edge->size(), 2u);
+    EXPECT_GE((edge->back() - edge->front()).head<2>().norm(), 1.0 - 1e-9);
+  }
+  // The far edge (the right one, at the road's end) is where the lane is 1 m wide: x = 39.43.
+  EXPECT_NEAR(found[0].right[0].x(), 39.43, 0.15);
+  EXPECT_NEAR(found[0].left[0].x(), 34.0, 0.15);
+}
+
 TEST(Crosswalks, ThinOrShallowPaintIsNone) {
   Road r;
   // One stripe across 1 m of the 7 m road: under 30 % of the samples.

@@ -1,15 +1,18 @@
 // lanemap-city: many drives into one map store, on every core of the machine or on a Slurm cluster.
 //
 //   lanemap-city --store S --osm city.osm [--jobs N] [--oracle | --semantic-channel C | --model M]
-//                [--no-lidar] [--no-align] DRIVE.lcmlog...
+//                [--no-lidar] [--no-align | --no-drive-offsets] DRIVE.lcmlog...
 //   lanemap-city --store S --osm city.osm --slurm [--slurm-dry-run] DRIVE.lcmlog...
 //
-// Two stages over lanemap-offline, so a city's map is the map `lanemap-offline --log A --log B ...`
-// makes of the same drives in the same order, byte for byte (tested):
+// Two stages over lanemap-offline; with --no-drive-offsets a city's map is the map
+// `lanemap-offline --log A --log B ...` makes of the same drives in the same order, byte for byte
+// (tested). By default the fusion first solves each drive's own pose offset over the roads drives
+// share and moves its grids by it (lanemap-offline --drive-offsets, core/bev/drive_offsets.h):
+// `--log` cannot, it maps each drive before it has projected the next.
 //   1. projection, one drive a job, N at once: `lanemap-offline --log D --project-only` segments
 //      the drive's frames, projects them and keeps what its BEV builder hands over per road
 //      (S/projections/NNNN: grids and projection.json). Most of the time goes here.
-//   2. fusion, once: `lanemap-offline --traversals S/projections/0000 ... --out S/map`: every
+//   2. fusion, once: `lanemap-offline --traversals S/projections/0000 ... --drive-offsets --out S/map`: every
 //      drive's traversals in the store's order, aligned onto the roads' evidence, explored, the
 //      junctions built, the map written (S/map: map.osm, map.geojson, map.png, summary.json).
 // The store keeps every drive's projection: a later run with new drives projects only those, then
@@ -56,7 +59,8 @@ struct Options {
   std::string store, osm, semantic_channel, model;
   std::vector<std::string> drives;
   int jobs = 0;  // 0: every core
-  bool oracle = false, no_lidar = false, no_align = false, drive_offsets = false, slurm = false, slurm_dry_run = false;
+  bool oracle = false, no_lidar = false, no_align = false, drive_offsets = false, no_drive_offsets = false, slurm = false,
+       slurm_dry_run = false;
 };
 
 // The store's folder of projections: NNNN (whole) in the order the drives were added.
@@ -159,7 +163,9 @@ int main(int argc, char** argv) {
   Options o;
   CLI::App app{"lanemap-city: many drives into one map store, on every core or on a Slurm cluster. Each new drive is\n"
                "projected once (lanemap-offline --project-only, N at once), then every drive of the store is fused\n"
-               "into one map (lanemap-offline --traversals, the store's order): the map --log A --log B ... makes."};
+               "into one map (lanemap-offline --traversals, the store's order), after solving each drive's own pose\n"
+               "offset over the roads drives share (--drive-offsets; with --no-drive-offsets: the map --log A --log B\n"
+               "... makes)."};
   app.add_option("--store", o.store, "the map store (a folder, created): projections/, map/ (map.osm, map.geojson, ...)")->required();
   app.add_option("--osm", o.osm, "road-level OSM file of the city (.osm or .osm.pbf)")->required()->check(CLI::ExistingFile);
   app.add_option("drives", o.drives, "drive logs (drive.lcmlog, or a folder holding one), added to the store in this order");
@@ -168,10 +174,16 @@ int main(int argc, char** argv) {
   app.add_option("--semantic-channel", o.semantic_channel, "map on the labels of this channel of the logs")->excludes(oracle);
   app.add_option("--model", o.model, "ONNX model, instead of config/segmenter.yaml's");
   app.add_flag("--no-lidar", o.no_lidar, "project on the flat plane only");
-  auto* no_align = app.add_flag("--no-align", o.no_align, "fuse later drives unaligned (to see what alignment removes)");
+  auto* no_align = app.add_flag("--no-align", o.no_align,
+                                "fuse later drives unaligned, each drive's offset not solved either (to see what alignment removes)");
+  auto* no_offsets = app.add_flag("--no-drive-offsets", o.no_drive_offsets,
+                                  "fuse without solving each drive's own pose offset first: the map lanemap-offline --log A --log B ...\n"
+                                  "makes, byte for byte");
   app.add_flag("--drive-offsets", o.drive_offsets,
-               "fuse after solving each drive's own pose offset over the roads drives share (lanemap-offline --drive-offsets)")
-      ->excludes(no_align);
+               "solve each drive's own pose offset over the roads drives share before fusing (lanemap-offline\n"
+               "--drive-offsets; the default, unless --no-align)")
+      ->excludes(no_align)
+      ->excludes(no_offsets);
   auto* slurm = app.add_flag("--slurm", o.slurm, "write the jobs for Slurm (S/slurm/*.sbatch) and submit them with sbatch");
   app.add_flag("--slurm-dry-run", o.slurm_dry_run, "with --slurm: write the job scripts, do not submit")->needs(slurm);
   CLI11_PARSE(app, argc, argv);
@@ -208,6 +220,9 @@ int main(int argc, char** argv) {
     }
     if (have.empty() && todo.empty()) throw std::runtime_error("no drive: give drive logs (the store has none yet)");
     const auto labels = labelArgs(o);
+    // Each drive's own offset, solved over the roads drives share (core/bev/drive_offsets.h): on
+    // unless asked not to, or unless the drives are fused unaligned.
+    const bool offsets = !o.no_drive_offsets && !o.no_align;
     auto projectArgs = [&](const std::string& log, const std::string& folder) {
       std::vector<std::string> a{offline.string(), "-q", "--osm", osm, "--log", log, "--project-only", folder};
       a.insert(a.end(), labels.begin(), labels.end());
@@ -218,7 +233,7 @@ int main(int argc, char** argv) {
       for (const auto& p : all) a.insert(a.end(), {"--traversals", p.string()});
       a.insert(a.end(), labels.begin(), labels.end());
       if (o.no_align) a.push_back("--no-align");
-      if (o.drive_offsets) a.push_back("--drive-offsets");
+      if (offsets) a.push_back("--drive-offsets");
       return a;
     };
 
@@ -244,7 +259,7 @@ int main(int argc, char** argv) {
       f << "#!/bin/bash\n#SBATCH --job-name=lanemap-fuse\n#SBATCH --output=" << (dir / "fuse.log").string() << "\n"
         << "#SBATCH --cpus-per-task=2\nset -euo pipefail\n"
         << join({self.string(), "--store", store.string(), "--osm", osm}) << (labels.empty() ? "" : " " + join(labels))
-        << (o.no_align ? " --no-align" : "") << "\n";
+        << (o.no_align ? " --no-align" : "") << (o.no_drive_offsets ? " --no-drive-offsets" : "") << "\n";
       f.close();
       std::printf("lanemap-city: wrote %s (%zu drive%s) and %s\n", (dir / "project.sbatch").c_str(), todo.size(),
                   todo.size() == 1 ? "" : "s", (dir / "fuse.sbatch").c_str());

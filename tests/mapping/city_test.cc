@@ -1,8 +1,9 @@
 // lanemap-city (issue 14): drives projected apart (several at once, or by Slurm's array tasks, on a
-// one-node Slurm cluster the test brings up) and
-// fused in the store's order give the map `lanemap-offline --log A --log B --log C` makes of them,
-// byte for byte; a later run projects only its new drives; bad input gets a clear error and leaves
-// the store as it was.
+// one-node Slurm cluster the test brings up) and fused in the store's order with --no-drive-offsets
+// give the map `lanemap-offline --log A --log B --log C` makes of them, byte for byte; by default
+// each drive's own offset is solved first (the map of lanemap-offline --traversals ...
+// --drive-offsets); a later run projects only its new drives; bad input gets a clear error and
+// leaves the store as it was.
 #include "tests/common/read_file.h"
 #include "tests/common/sim_drive.h"
 #include "tests/common/temp_dir.h"
@@ -79,7 +80,7 @@ TEST_F(City, DrivesProjectedOnTwoCoresFuseIntoTheMapOfOneSequentialRun) {
   const auto seq = readJson(tmp_->str("sequential/summary.json"));
   ASSERT_EQ(seq["drives"].size(), 3u);
   ASSERT_FALSE(seq["drives"][1]["merged"].empty()) << "drive 2 merged nothing onto drive 1: the test shows no fusion";
-  const auto r = lt::runCommand(city("two-cores") + " --jobs 2 " + log(1) + " " + log(2) + " " + log(3));
+  const auto r = lt::runCommand(city("two-cores") + " --no-drive-offsets --jobs 2 " + log(1) + " " + log(2) + " " + log(3));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("3 drives projected"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("on 2 jobs"), std::string::npos) << r.output;
@@ -90,10 +91,10 @@ TEST_F(City, DrivesProjectedOnTwoCoresFuseIntoTheMapOfOneSequentialRun) {
 }
 
 TEST_F(City, ALaterRunProjectsOnlyItsNewDrivesAndFusesThemAll) {
-  auto r = lt::runCommand(city("later") + " " + log(1) + " " + log(2));
+  auto r = lt::runCommand(city("later") + " --no-drive-offsets " + log(1) + " " + log(2));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const fs::file_time_type first = fs::last_write_time(tmp_->str("later/projections/0000/projection.json"));
-  r = lt::runCommand(city("later") + " " + log(2) + " " + log(3));
+  r = lt::runCommand(city("later") + " --no-drive-offsets " + log(2) + " " + log(3));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find(log(2) + " is in the store already (0001)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("1 drive projected"), std::string::npos) << r.output;
@@ -106,10 +107,12 @@ TEST_F(City, ALaterRunProjectsOnlyItsNewDrivesAndFusesThemAll) {
 // SLURM_ARRAY_TASK_ID, then the fusion): the same map. (No Slurm cluster here: the scheduler is
 // not in the test, the job scripts are.)
 TEST_F(City, TheSlurmJobScriptsRunTaskByTaskGiveTheSameMap) {
-  auto r = lt::runCommand(city("slurm") + " --slurm --slurm-dry-run " + log(1) + " " + log(2) + " " + log(3));
+  auto r = lt::runCommand(city("slurm") + " --no-drive-offsets --slurm --slurm-dry-run " + log(1) + " " + log(2) + " " + log(3));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string project = readFile(tmp_->str("slurm/slurm/project.sbatch"));
   EXPECT_NE(project.find("#SBATCH --array=0-2\n"), std::string::npos) << project;
+  // The fusion job fuses as asked (it runs lanemap-city again, whose default solves the offsets).
+  EXPECT_NE(readFile(tmp_->str("slurm/slurm/fuse.sbatch")).find(" --no-drive-offsets\n"), std::string::npos);
   EXPECT_FALSE(fs::exists(tmp_->str("slurm/map")));  // nothing run
   for (int task : {2, 0, 1}) {  // array tasks run in any order
     r = lt::runCommand("SLURM_ARRAY_TASK_ID=" + std::to_string(task) + " bash " + tmp_->str("slurm/slurm/project.sbatch"));
@@ -132,7 +135,7 @@ TEST_F(City, ASlurmClusterOnThisMachineRunsTheJobsToTheSameMap) {
         << tool << " is missing: scripts/install-deps.sh installs munge and slurm-wlm";
   }
   const auto r = lt::runCommand("unshare -n " + std::string(LANEMAP_SOURCE_DIR) + "/tests/mapping/slurm_cluster.sh " +
-                                tmp_->str("cluster") + " 240 " + city("on-slurm") + " --slurm " + log(1) + " " + log(2) + " " +
+                                tmp_->str("cluster") + " 240 " + city("on-slurm") + " --no-drive-offsets --slurm " + log(1) + " " + log(2) + " " +
                                 log(3));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("projection array job"), std::string::npos) << r.output;
@@ -143,13 +146,27 @@ TEST_F(City, ASlurmClusterOnThisMachineRunsTheJobsToTheSameMap) {
   expectSequentialMap(tmp_->str("on-slurm/map"));
 }
 
-// --drive-offsets: each drive's own offset solved over the roads drives share. Drives 1 and 2 drive
-// one route, each with its campaign pose offset (scenario.json pose_offset, drawn per drive): the
-// difference of their solved offsets is the difference of those, and the linked drives' offsets
-// have zero mean; a drive that shares no road keeps none.
+// By default each drive's own offset is solved over the roads drives share (--drive-offsets). Drives
+// 1 and 2 drive one route, each with its campaign pose offset (scenario.json pose_offset, drawn per
+// drive): the difference of their solved offsets is the difference of those, and the linked drives'
+// offsets have zero mean; a drive that shares no road keeps none. The map is lanemap-offline's of
+// the store's projections with --drive-offsets, byte for byte.
 TEST_F(City, DriveOffsetsSolvedOverSharedRoadsAreTheDrivesPoseOffsets) {
-  const auto r = lt::runCommand(city("offsets") + " --drive-offsets " + log(1) + " " + log(2) + " " + log(3));
+  auto r = lt::runCommand(city("offsets") + " --drive-offsets --no-drive-offsets " + log(1));
+  EXPECT_NE(r.exit_code, 0) << "both asked: refused";
+  EXPECT_FALSE(fs::exists(tmp_->str("offsets/map")));
+  r = lt::runCommand(city("offsets") + " " + log(1) + " " + log(2) + " " + log(3));
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::string trav;
+  for (const char* slot : {"0000", "0001", "0002"}) trav += " --traversals " + tmp_->str("offsets/projections/") + slot;
+  r = lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --no-lidar --osm " + osm() + trav + " --drive-offsets --out " +
+                     tmp_->str("offsets-offline"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"map.osm", "map.geojson"}) {
+    EXPECT_EQ(readFile(tmp_->str("offsets/map/") + f), readFile(tmp_->str("offsets-offline/") + f)) << f;
+  }
+  EXPECT_NE(readFile(tmp_->str("offsets/map/map.osm")), readFile(tmp_->str("sequential/map.osm")))
+      << "the offsets moved nothing: the test cannot tell the default from --no-drive-offsets";
   const auto summary = readJson(tmp_->str("offsets/map/summary.json"));
   ASSERT_EQ(summary["drives"].size(), 3u);
   Eigen::Vector2d solved[3], pose[3];

@@ -3,12 +3,13 @@
 # --world-seed), each planned on what the map covers so far (the first on nothing)
 # (lanemap-coverage --json, then lanemap-sim --cover: the most unmapped directed length in its
 # SECONDS). After each drive every log so far is mapped into one map (lanemap-city: the new drive
-# projected, all fused as lanemap-offline --oracle would map them, flat ground, BEV aligned) and printed: the share of the city's directed road length mapped
+# projected, all fused on truth labels, flat ground, BEV aligned, each drive's own pose offset
+# solved over the roads drives share) and printed: the share of the city's directed road length mapped
 # (lanemap-coverage) and the map's scores against the whole city's truth (lanemap-eval, not
 # --driven: a road not driven yet counts as missed), lanes and junction pairs. A drive starts out of
 # a dead end while a road leaving one is still to cover (lanemap-sim --cover's default start: no
-# U-turns, so only a drive's first road covers those). At the end: every drive fused again with its
-# own offset solved over the roads drives share (lanemap-offline --drive-offsets, "+off"), the simulated seconds against
+# U-turns, so only a drive's first road covers those). At the end: every drive fused again without
+# solving the drives' offsets (lanemap-offline --traversals ..., "-off": the blur they remove), the simulated seconds against
 # the simulator's wall time, and Lanelet2's own checks on the fused map when they are built
 # (tests/lanelet2_tools builds them into ~/.cache/lanelet2-1.2.3/bin, or LANELET2_BIN).
 #
@@ -84,28 +85,28 @@ secs = sum(json.load(open(p))["duration_s"] for p in glob.glob(os.path.join(out,
 print(f"  simulated {secs:.0f} s of driving in {len(glob.glob(os.path.join(out, 'drive*', 'scenario.json')))} drives; "
       f"lanemap-sim wall time this run {wall:.0f} s (drives simulated before this run not counted)")
 PY
-# The same drives fused once more with each drive's own offset solved over the roads drives share
-# (lanemap-offline --drive-offsets, core/bev/drive_offsets.h), scored the same way.
+# The same drives fused once more without solving each drive's own offset (lanemap-city's default:
+# lanemap-offline --drive-offsets, core/bev/drive_offsets.h), scored the same way.
 trav=()
 for p in "$out"/city/projections/[0-9]*; do trav+=(--traversals "$p"); done
-if [ ${#trav[@]} -gt 0 ] && "$bin/lanemap-offline" -q --oracle --no-lidar --osm "$out/drive1/roads.osm" "${trav[@]}" --drive-offsets \
-      --out "$out/map-offsets" > "$out/map-offsets.log" 2>&1; then
-  "$bin/lanemap-eval" -q --truth "$out/drive1/groundtruth.osm" --map "$out/map-offsets/map.osm" --json "$out/eval-offsets.json" > /dev/null 2>&1 || true
+if [ ${#trav[@]} -gt 0 ] && "$bin/lanemap-offline" -q --oracle --no-lidar --osm "$out/drive1/roads.osm" "${trav[@]}" \
+      --out "$out/map-no-offsets" > "$out/map-no-offsets.log" 2>&1; then
+  "$bin/lanemap-eval" -q --truth "$out/drive1/groundtruth.osm" --map "$out/map-no-offsets/map.osm" --json "$out/eval-no-offsets.json" > /dev/null 2>&1 || true
   python3 - "$out" "$(( ${#trav[@]} / 2 ))" <<'PY'
 import json, os, sys
 out, k = sys.argv[1], sys.argv[2]
 try:
-    j = json.load(open(os.path.join(out, "eval-offsets.json")))
+    j = json.load(open(os.path.join(out, "eval-no-offsets.json")))
     l, i = j["lanes"], j["intersections"]
     nan = float("nan")
     f = lambda v, w: f"{v if v is not None else nan:{w}.3f}"
-    print(f"  {k + ' +off':<16} {'':>9} {'':>8} {f(l['precision'], 7)} {f(l['recall'], 7)} {f(l['rms_m'], 9)} {f(l['miou'], 8)} "
-          f"{f(i['precision'], 7)} {f(i['recall'], 7)} {f(i['rms_m'], 9)}   (all {k} drives fused with --drive-offsets)")
+    print(f"  {k + ' -off':<16} {'':>9} {'':>8} {f(l['precision'], 7)} {f(l['recall'], 7)} {f(l['rms_m'], 9)} {f(l['miou'], 8)} "
+          f"{f(i['precision'], 7)} {f(i['recall'], 7)} {f(i['rms_m'], 9)}   (all {k} drives fused without --drive-offsets)")
 except (OSError, KeyError, TypeError, ValueError) as e:
-    print(f"  --drive-offsets: no score ({e})")
+    print(f"  without --drive-offsets: no score ({e})")
 PY
 else
-  echo "  --drive-offsets: lanemap-offline failed (see $out/map-offsets.log)"
+  echo "  without --drive-offsets: lanemap-offline failed (see $out/map-no-offsets.log)"
 fi
 l2bin=${LANELET2_BIN:-${XDG_CACHE_HOME:-$HOME/.cache}/lanelet2-1.2.3/bin}
 final=$out/map$drives/map.osm

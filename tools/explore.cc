@@ -3,12 +3,15 @@
 // found (extent, offset, bounds, relations).
 //
 //   lanemap-explore --bev DIR/bev/road_ID.bev --osm roads.osm --road ID [--lanes-config FILE]
+//       [--station S]          explore it as the road a drive ended on, S m along it (its
+//                              summary.json "partial" station_m; DIR/bev/partial/road_ID.bev)
 //       [--history FILE.csv]   surviving particles (s, d) of every 5th step, for plotting
 //       [--raster FILE.png]    the straightened raster the particles ran on (s up, d to the left),
 //                              the lanes' centre lines over it
 #include "core/bev/bev_grid.h"
 #include "core/lanes/explorer.h"
 #include "core/lanes/options.h"
+#include "core/mapping/partial_road.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
 #include "processes/framework/process.h"
@@ -28,10 +31,15 @@ int main(int argc, char** argv) {
   std::string bev_path, osm_path, history_path, raster_path;
   std::string lanes_config = "config/lane_mapper.yaml";
   int64_t road_id = -1;
+  double station = -1.0;
   app.add_option("--bev", bev_path, "a road's BEV grid (lanemap-offline's DIR/bev/road_<id>.bev)")->required();
   app.add_option("--osm", osm_path, "the road-level OSM the map was built on")->required();
   app.add_option("--road", road_id, "atomic road id (the <id> of the file name)")->required();
   app.add_option("--lanes-config", lanes_config, "the lane mapper config: its explorer block, and its map block's skeleton options")->capture_default_str();
+  app.add_option("--station", station,
+                 "explore the road as far as a drive that ended on it got: the station (m along the road) of its "
+                 "summary.json \"partial\" entry; the grid is then DIR/bev/partial/road_<id>.bev")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--history", history_path, "write the surviving particles (s, d) of every 5th step as CSV");
   app.add_option("--raster", raster_path,
                  "write the straightened raster (rows along s upwards, d to the left; one pixel per cell) as PNG: "
@@ -45,7 +53,8 @@ int main(int argc, char** argv) {
     const auto* road = sk.road(road_id);
     if (!road) throw std::runtime_error("no atomic road " + std::to_string(road_id) + " in " + osm_path);
     const lanes::ExplorerOptions options = settings.explorerOptions();
-    const auto geometry = lanes::RoadGeometry::fromSkeleton(*road);
+    const auto geometry =
+        station >= 0.0 ? mapping::drivenStretch(*road, station, options) : lanes::RoadGeometry::fromSkeleton(*road);
     const auto grid = bev::BevGrid::load(bev_path);
     const bool debug = !history_path.empty() || !raster_path.empty();
     const auto res = lanes::exploreRoad(grid, geometry, options, std::nullopt, debug ? 5 : 0);

@@ -85,8 +85,8 @@ secs = sum(json.load(open(p))["duration_s"] for p in glob.glob(os.path.join(out,
 print(f"  simulated {secs:.0f} s of driving in {len(glob.glob(os.path.join(out, 'drive*', 'scenario.json')))} drives; "
       f"lanemap-sim wall time this run {wall:.0f} s (drives simulated before this run not counted)")
 PY
-# The same drives fused once more without solving each drive's own offset (lanemap-city's default:
-# lanemap-offline --drive-offsets, core/bev/drive_offsets.h), scored the same way.
+# The same drives fused once more without solving each drive's own offset (lanemap-city solves them
+# by default: lanemap-offline --drive-offsets, core/bev/drive_offsets.h), scored the same way.
 trav=()
 for p in "$out"/city/projections/[0-9]*; do trav+=(--traversals "$p"); done
 if [ ${#trav[@]} -gt 0 ] && "$bin/lanemap-offline" -q --oracle --no-lidar --osm "$out/drive1/roads.osm" "${trav[@]}" \

@@ -83,7 +83,9 @@ struct ExplorerOptions {
   double partial_min_driven_m = 2.0;     // the road a drive ended on is mapped when the car got this
                                          //   far past its start ROI (core/mapping/partial_road.h);
                                          //   under short_road_min_m driven, the stretch explored
-                                         //   reaches back into the ROI, not past the car
+                                         //   reaches back into the ROI, not past the car (but
+                                         //   within short_road_min_m of the road's start node,
+                                         //   see partial_road.h)
   double carry_lanes_max_m = 15.0;       // a road whose stretch between its ROIs is shorter takes the
                                          //   lanes of the road leading straight into it (carried_lanes.h)
                                          //   when exploring found no lane on it (0: never)

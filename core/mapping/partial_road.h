@@ -29,8 +29,11 @@ double roadFrameLength(const skeleton::AtomicRoad& road, const lanes::ExplorerOp
 
 // The road's geometry for exploring it as far as `station_m`: s_end = min(s_end, station_m).
 // When under options.short_road_min_m was driven past s_begin, s_begin moves back to that far
-// before the station (not before 0). Throws lanes::LanesError (naming the road and the metres
-// driven) when under options.partial_min_driven_m of the road past s_begin was driven.
+// before the station, but not before 0: a car stopped under short_road_min_m from the road's
+// start node leaves a shorter stretch, which exploreRoad widens around its middle
+// (explorationStretch), up to short_road_min_m - station past the car. Throws lanes::LanesError
+// (naming the road and the metres driven) when under options.partial_min_driven_m of the road
+// past s_begin was driven.
 lanes::RoadGeometry drivenStretch(const skeleton::AtomicRoad& road, double station_m, const lanes::ExplorerOptions& options);
 
 // Tags every road lanelet of `lanes` partial (station, road length); the explored lanes stop at

@@ -115,7 +115,7 @@ int renderSimFrames(const SimFrameOptions& o, const std::function<bool(const Sim
 
     const sim::CameraRenderer& renderer = *renderers[static_cast<size_t>(set)];
     const sim::RenderedFrame rf =
-        renderer.render(*world, pose, st.lanelet, o.seed * 1000003ULL + static_cast<uint64_t>(produced));
+        renderer.render(*world, pose, st.label_lanelet, o.seed * 1000003ULL + static_cast<uint64_t>(produced));
     SimFrame f;
     f.index = produced;
     f.t = t;

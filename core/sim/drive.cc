@@ -332,9 +332,11 @@ DriveOptions DriveOptions::fromYaml(const config::YamlReader& r) {
   r.read("accel", o.accel);
   r.read("lane_change_length_m", o.lane_change_length_m);
   r.read("lane_change_probability", o.lane_change_probability);
+  r.read("label_ahead_max_turn_deg", o.label_ahead_max_turn_deg);
   if (o.cruise_speed_mps <= 0 || o.accel <= 0 || o.max_lateral_accel <= 0 || o.lane_change_length_m <= 0 ||
-      o.lane_change_probability < 0 || o.lane_change_probability >= 1) {
-    r.failHere("speeds, accelerations and lengths must be > 0, lane_change_probability in [0, 1)");
+      o.lane_change_probability < 0 || o.lane_change_probability >= 1 || o.label_ahead_max_turn_deg > 180) {
+    r.failHere("speeds, accelerations and lengths must be > 0, lane_change_probability in [0, 1), "
+               "label_ahead_max_turn_deg at most 180 (negative: never)");
   }
   return o;
 }
@@ -426,7 +428,25 @@ Trajectory::Trajectory(const map::LaneMap& truth, const World& world, const Lane
       acc += raw[static_cast<size_t>(j)].p;
       ++n;
     }
-    path_[i] = {acc / n, raw[i].lanelet, raw[i].road_id};
+    path_[i] = {acc / n, raw[i].lanelet, raw[i].road_id, raw[i].lanelet};
+  }
+  // Inside an intersection the labels follow the road lanelet the car drives into next, once the
+  // car heads within label_ahead_max_turn_deg of that lane's direction at its start (never when
+  // negative).
+  const Lanelet* next_road = nullptr;
+  for (size_t i = path_.size(); i-- > 0;) {
+    const Lanelet* ll = g.get(path_[i].lanelet);
+    if (ll && ll->kind == LaneletKind::kRoad) {
+      next_road = ll;
+      continue;
+    }
+    path_[i].label_lanelet = -1;
+    if (!next_road || o.label_ahead_max_turn_deg < 0) continue;
+    const Eigen::Vector2d lane_dir = pointAt(next_road->centre, 2.0) - pointAt(next_road->centre, 0.0);
+    const Eigen::Vector2d car_dir = path_[std::min(i + 2, path_.size() - 1)].p - path_[i >= 2 ? i - 2 : 0].p;
+    if (lane_dir.norm() < 1e-6 || car_dir.norm() < 1e-6) continue;
+    const double turn = std::acos(std::clamp(lane_dir.normalized().dot(car_dir.normalized()), -1.0, 1.0));
+    if (turn <= o.label_ahead_max_turn_deg * M_PI / 180.0) path_[i].label_lanelet = next_road->id;
   }
   s_.assign(path_.size(), 0.0);
   for (size_t i = 1; i < path_.size(); ++i) s_[i] = s_[i - 1] + (path_[i].p - path_[i - 1].p).norm();
@@ -516,6 +536,7 @@ VehicleState Trajectory::at(double t) const {
   const size_t i = it == s_.begin() ? 0 : static_cast<size_t>(it - s_.begin()) - 1;
   st.lanelet = path_[i].lanelet;
   st.road_id = path_[i].road_id;
+  st.label_lanelet = path_[i].label_lanelet;
   return st;
 }
 

@@ -36,6 +36,12 @@ struct DriveOptions {
   // Auto routes: chance of a lane change on a road lanelet of 40 m or more with a neighbour lane.
   // Given routes: spread of the seeded lane preferences (lanes cost 1 +- this per metre).
   double lane_change_probability = 0.35;
+  // Inside an intersection the camera's lane classes follow the road lanelet the car drives into
+  // next once the car heads within this of that lane's direction at its start (VehicleState::
+  // label_lanelet; 180: from the intersection's entry on). Negative (the default): never, every
+  // lane is background while the car is inside an intersection. Measured on the broad benchmark
+  // (README, "Labels inside a junction"): no pooled gain yet with the mapper and model of today.
+  double label_ahead_max_turn_deg = -1.0;
   std::vector<int64_t> route_nodes;  // intersection ids to pass through, in order; empty: auto
 
   // Reads the keys present in a `drive` node (config/sim_drive.yaml); others keep their defaults.
@@ -53,6 +59,11 @@ struct VehicleState {
   double yaw_rate = 0.0;               // rad/s
   int64_t lanelet = -1;                // the lanelet the car is in (ego lane)
   int64_t road_id = -1;                // the atomic road, -1 inside an intersection
+  // The road lanelet the camera's lane classes are relative to: `lanelet` on a road; inside an
+  // intersection -1 (every lane background), or, with DriveOptions::label_ahead_max_turn_deg set,
+  // the road lanelet the car drives into next once the car heads within that of it (as BDD100K's
+  // "direct" drivable area, the lane the car is on or heading into).
+  int64_t label_lanelet = -1;
 };
 
 // The lanelets the car drives through and where in each it changes lane.
@@ -89,6 +100,7 @@ class Trajectory {
     Eigen::Vector2d p;
     int64_t lanelet;
     int64_t road_id;
+    int64_t label_lanelet = -1;  // VehicleState::label_lanelet
   };
   double arcLengthAt(double t) const;
   Eigen::Isometry3d poseAt(double s) const;

@@ -98,14 +98,14 @@ PoseMeasurement Simulator::poseAt(double t, PoseNoise& noise, double dt) const {
 
 CameraMeasurement Simulator::cameraAt(double t, int64_t seq) const {
   const VehicleState st = trajectory_.at(t);
-  const RenderedFrame f = renderer_.render(world_, st.vehicle_to_enu, st.lanelet,
+  const RenderedFrame f = renderer_.render(world_, st.vehicle_to_enu, st.label_lanelet,
                                            options_.seed * 1000003ULL + static_cast<uint64_t>(seq));
   CameraMeasurement m;
   m.utime = toUtime(options_.start_utime, t);
   m.seq = seq;
   m.width = f.rgb.cols;
   m.height = f.rgb.rows;
-  m.ego_lanelet = st.lanelet;
+  m.ego_lanelet = st.label_lanelet;
   cv::imencode(".jpg", f.rgb, m.jpeg, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality});
   cv::imencode(".png", f.labels, m.labels_png, {cv::IMWRITE_PNG_COMPRESSION, 3});
   return m;

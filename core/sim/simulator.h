@@ -38,7 +38,7 @@ struct CameraMeasurement {
   int width = 0, height = 0;
   std::vector<uint8_t> jpeg;        // the camera image
   std::vector<uint8_t> labels_png;  // ground-truth class image (sim::LabelClass), PNG
-  int64_t ego_lanelet = -1;
+  int64_t ego_lanelet = -1;         // the lanelet the labels are relative to (VehicleState::label_lanelet)
 };
 
 struct LidarMeasurement {

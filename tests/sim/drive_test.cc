@@ -1,5 +1,7 @@
 // The simulated car's route, lanes and motion over the real West Oakland network.
 #include "core/osm/osm_data.h"
+#include "core/camera/camera_model.h"
+#include "core/sim/camera_renderer.h"
 #include "core/sim/drive.h"
 #include "core/sim/world_builder.h"
 #include "core/skeleton/skeleton.h"
@@ -11,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <utility>
 
 namespace {
 
@@ -114,6 +117,104 @@ TEST(Drive, EgoLaneletContainsTheCar) {
   }
   ASSERT_GT(on_road, 20);
   EXPECT_GE(inside, 0.9 * on_road) << inside << " of " << on_road;
+}
+
+// Inside an intersection there is no road lane under the car. With label_ahead_max_turn_deg set,
+// once the car heads into the road lanelet it drives into next (within that of the lane's
+// direction), the labels follow that lanelet, so the road ahead is drivable in the frames taken
+// while the car turns onto it rather than background until the car is on it.
+TEST(Drive, InsideAnIntersectionTheLabelsFollowTheRoadAhead) {
+  const Net& n = westOakland();
+  const auto& truth = n.world->truth();
+  sim::DriveOptions o;
+  o.seed = 3;
+  o.duration_s = 60.0;
+  o.label_ahead_max_turn_deg = 30.0;
+  const auto plan = sim::planDrive(*n.sk, truth, o);
+  const sim::Trajectory traj(truth, *n.world, plan, o);
+  auto headingTo = [&](const sim::VehicleState& st, const map::Lanelet& lane) {
+    const Eigen::Vector2d car = st.vehicle_to_enu.linear().col(0).head<2>().normalized();
+    const Eigen::Vector2d dir = (lane.centre[1] - lane.centre[0]).head<2>().normalized();
+    return std::acos(std::clamp(car.dot(dir), -1.0, 1.0)) * 180.0 / M_PI;
+  };
+  int in_junction = 0, labelled = 0;
+  // The labelled junction sample nearest its road ahead but 3 m or more before it.
+  double frame_t = -1.0, frame_left = 1e9;
+  for (double t = 0.0; t <= traj.duration(); t += 0.25) {
+    const auto st = traj.at(t);
+    const auto* ll = truth.lanelet(st.lanelet);
+    ASSERT_NE(ll, nullptr);
+    if (ll->kind == map::LaneletKind::kRoad) {
+      EXPECT_EQ(st.label_lanelet, st.lanelet) << "t " << t;
+      continue;
+    }
+    ++in_junction;
+    if (st.label_lanelet < 0) continue;
+    ++labelled;
+    const auto* ahead = truth.lanelet(st.label_lanelet);
+    ASSERT_NE(ahead, nullptr) << "t " << t;
+    EXPECT_EQ(ahead->kind, map::LaneletKind::kRoad);
+    EXPECT_NE(std::find(ll->successors.begin(), ll->successors.end(), st.label_lanelet), ll->successors.end())
+        << "t " << t << ": lanelet " << st.label_lanelet << " does not follow " << st.lanelet;
+    // The car heads into it (the path's heading over +-1 m and the pose's yaw differ by a few degrees).
+    EXPECT_LT(headingTo(st, *ahead), o.label_ahead_max_turn_deg + 8.0) << "t " << t;
+    const Eigen::Vector2d p = st.vehicle_to_enu.translation().head<2>();
+    const double left = (ahead->centre.front().head<2>() - p).norm();
+    if (left >= 3.0 && left < frame_left) frame_left = left, frame_t = t;
+  }
+  ASSERT_GT(labelled, 4) << "of " << in_junction << " samples in an intersection";
+  ASSERT_GE(frame_t, 0.0);
+
+  // That frame: the road ahead is the ego lane (and perhaps its neighbours); labelled relative to
+  // the intersection lanelet the car is in, it would all be background.
+  const auto st = traj.at(frame_t);
+  const sim::CameraRenderer renderer(camera::CameraModel::fromYamlFile(std::string(LANEMAP_DATA_DIR) + "/../config/vehicle.yaml"));
+  auto count = [](const cv::Mat& labels, bool any_lane) {
+    int n = 0;
+    for (int v = 0; v < labels.rows; ++v)
+      for (int u = 0; u < labels.cols; ++u) {
+        const auto c = static_cast<sim::LabelClass>(labels.at<uint8_t>(v, u));
+        n += any_lane ? (c >= sim::LabelClass::kLaneEgo && c <= sim::LabelClass::kLaneRightRight)
+                      : c == sim::LabelClass::kLaneEgo;
+      }
+    return n;
+  };
+  const cv::Mat ahead = renderer.render(*n.world, st.vehicle_to_enu, st.label_lanelet, 7).labels;
+  const cv::Mat in_place = renderer.render(*n.world, st.vehicle_to_enu, st.lanelet, 7).labels;
+  EXPECT_GT(count(ahead, false), 1000) << "t " << frame_t << ", " << frame_left << " m before the road ahead";
+  EXPECT_EQ(count(in_place, true), 0);
+}
+
+// label_ahead_max_turn_deg bounds which samples inside an intersection carry the lane ahead's
+// labels: 180 labels every one; 30 not the first part of a turn; 2 fewer still; the default
+// (negative) none, as the simulator labelled before the option.
+TEST(Drive, LabelAheadTurnLimitBoundsWhichJunctionSamplesAreLabelled) {
+  const Net& n = westOakland();
+  const auto& truth = n.world->truth();
+  auto labelled = [&](double max_turn_deg) {
+    sim::DriveOptions o;
+    o.seed = 3;
+    o.duration_s = 60.0;
+    o.label_ahead_max_turn_deg = max_turn_deg;
+    const auto plan = sim::planDrive(*n.sk, truth, o);
+    const sim::Trajectory traj(truth, *n.world, plan, o);
+    int in_junction = 0, with_label = 0;
+    for (double t = 0.0; t <= traj.duration(); t += 0.25) {
+      const auto st = traj.at(t);
+      if (truth.lanelet(st.lanelet)->kind == map::LaneletKind::kRoad) continue;
+      ++in_junction;
+      with_label += st.label_lanelet >= 0;
+    }
+    return std::make_pair(with_label, in_junction);
+  };
+  const auto all = labelled(180.0), some = labelled(30.0), few = labelled(2.0);
+  const auto none = labelled(sim::DriveOptions().label_ahead_max_turn_deg);
+  EXPECT_EQ(none.first, 0);
+  EXPECT_GT(none.second, 4);
+  EXPECT_EQ(all.first, all.second);
+  EXPECT_LT(some.first, all.first);
+  EXPECT_GT(some.first, 0);
+  EXPECT_LT(few.first, some.first);
 }
 
 TEST(Drive, GivenRouteNodesAreFollowed) {

@@ -1,6 +1,6 @@
 // The simulated car's route, lanes and motion over the real West Oakland network.
-#include "core/osm/osm_data.h"
 #include "core/camera/camera_model.h"
+#include "core/osm/osm_data.h"
 #include "core/sim/camera_renderer.h"
 #include "core/sim/drive.h"
 #include "core/sim/world_builder.h"

@@ -1,13 +1,14 @@
 #include "core/bev/bev_grid.h"
 
 #include "core/io/atomic_file.h"
+#include "core/io/read_file.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <iterator>
 #include <limits>
+#include <optional>
 
 namespace lanemap::bev {
 
@@ -145,9 +146,9 @@ void BevGrid::save(const std::string& path) const {
 }
 
 BevGrid BevGrid::load(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw BevError("cannot read BEV grid file: " + path);
-  const std::string in((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  const std::optional<std::string> content = io::readFile(path);
+  if (!content) throw BevError("cannot read BEV grid file: " + path);
+  const std::string& in = *content;
   const int format = formatOf(in, path);
   size_t pos = sizeof(kMagic);
   BevGridOptions opt;

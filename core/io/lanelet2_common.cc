@@ -3,12 +3,12 @@
 
 #include "core/io/lanelet2.h"
 #include "core/io/lanelet2_internal.h"
+#include "core/io/read_file.h"
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <regex>
 
 namespace lanemap::io {
@@ -30,18 +30,7 @@ std::string hex64(uint64_t v) {
   return buf;
 }
 
-std::string readAll(const std::string& path) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  const std::streamoff size = in ? static_cast<std::streamoff>(in.tellg()) : -1;
-  if (size >= 0) {  // a file of known size: one read (a city's truth is some 150 MB)
-    std::string out(static_cast<size_t>(size), '\0');
-    in.seekg(0);
-    if (in.read(out.data(), size)) return out;
-  }
-  in.clear();
-  in.seekg(0);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
+std::string readAll(const std::string& path) { return readFile(path).value_or(std::string()); }
 
 std::string sidecarHashOf(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

@@ -4,6 +4,7 @@
 #include "core/geo/local_frame.h"
 #include "core/geo/polyline.h"
 #include "core/io/atomic_file.h"
+#include "core/io/read_file.h"
 #include "core/io/lanelet2.h"
 #include "core/osm/coordinate_guard.h"
 
@@ -21,7 +22,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <optional>
 #include <set>
@@ -430,8 +430,7 @@ std::vector<CheckResult> checkLanelet2Map(const std::string& path, const MapChec
     c.applicable = n > 0;
     auto& p = add("projector_info", "map_projector_info.yaml beside the map");
     const auto info = std::filesystem::path(path).parent_path() / "map_projector_info.yaml";
-    std::ifstream in(info);
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string text = readFile(info.string()).value_or(std::string());
     if (text.find("projector_type:") == std::string::npos) p.passed = false;
   }
   for (auto& c : out) {

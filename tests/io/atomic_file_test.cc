@@ -1,7 +1,9 @@
 // Tests of atomic file writing (core/io/atomic_file.h): content lands completely, a reader that
 // opened the old file keeps reading the old content (the file is replaced, not rewritten in
-// place), no temporary file is left behind, failures name the path.
+// place), no temporary file is left behind, failures name the path. And reading a whole file
+// (core/io/read_file.h).
 #include "core/io/atomic_file.h"
+#include "core/io/read_file.h"
 #include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
@@ -25,6 +27,34 @@ std::string readAll(std::istream& in) {
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+TEST(ReadFile, GivesEveryByteOfAFileOfKnownSize) {
+  std::string bytes(3 * 1024 * 1024 + 7, '\0');  // binary, NULs included, over a buffer's size
+  for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<char>((i * 131u) % 251u);
+  const lanemap::testing::TempDir dir("io-read");  // its own: AtomicFile tests count their folder's files
+  const std::string path = dir.str("blob.bin");
+  writeFileAtomically(path, bytes);
+  const std::optional<std::string> got = readFile(path);
+  ASSERT_TRUE(got.has_value());
+  EXPECT_EQ(got->size(), bytes.size());
+  EXPECT_TRUE(*got == bytes);
+  writeFileAtomically(path, std::string());
+  ASSERT_TRUE(readFile(path).has_value());
+  EXPECT_TRUE(readFile(path)->empty());
+}
+
+TEST(ReadFile, StreamsAFileWithoutAKnownSize) {
+  // /proc files report size 0: the content is streamed instead.
+  const std::optional<std::string> got = readFile("/proc/self/status");
+  ASSERT_TRUE(got.has_value());
+  EXPECT_NE(got->find("Pid:"), std::string::npos);
+}
+
+TEST(ReadFile, MissingFileOrFolderIsNullopt) {
+  const lanemap::testing::TempDir dir("io-read");
+  EXPECT_FALSE(readFile(dir.str("no-such-file")).has_value());
+  EXPECT_FALSE(readFile(dir.path().string()).has_value());  // a folder has no content to read
 }
 
 TEST(AtomicFile, ReplacesContentAndLeavesNoTemporaryFile) {

@@ -1,9 +1,9 @@
 // The shipped segmentation model (models/lanesegnet.onnx, run through core/seg/segmenter.h exactly
-// as lanemap-segmenter runs it) scored on held-out simulated frames: the West Oakland street
-// network (never trained on: the model saw only Monaco), three drives with seeds used neither for
-// training nor for the model card's validation, rendered here with the simulator's core. Per-class
-// IoU and mIoU are printed and asserted. Plus: model/config errors, frame decoding errors, the
-// drop-oldest queue, the confusion-matrix arithmetic.
+// as lanemap-segmenter runs it) scored on simulated frames of street networks it was never trained
+// on (it saw only Monaco): West Oakland, and four networks of data/osm/dev, rendered here with the
+// simulator's core, with seeds used neither for the model card's validation nor by the broad
+// benchmark. Per-class IoU and mIoU are printed and asserted. Plus: model/config errors, frame
+// decoding errors, the drop-oldest queue, the confusion-matrix arithmetic.
 #include "core/seg/segmenter.h"
 #include "core/seg/sim_frames.h"
 #include "processes/segmenter/frame_queue.h"
@@ -46,37 +46,37 @@ cv::Mat oneFrame(uint64_t seed) {
   return img;
 }
 
-}  // namespace
-
-TEST(SegModel, IouOnHeldOutWestOakland) {
-  seg::Segmenter model(shippedModel());
+// The shipped model scored on frames rendered here with the simulator's core (varied light and
+// camera, as the model card's frames): `frames_per_seed` frames of one drive per seed over `osm`;
+// also counted into `pooled` when given.
+seg::ConfusionMatrix scoreShippedModel(seg::Segmenter& model, const std::string& osm, const std::vector<uint64_t>& seeds,
+                                       int frames_per_seed, double spacing_s, double duration_s, int* frames,
+                                       seg::ConfusionMatrix* pooled = nullptr) {
   seg::SimFrameOptions o;
-  o.osm_path = kRoot + "/data/osm/west-oakland.osm";
+  o.osm_path = kRoot + "/data/osm/" + osm;
   o.vehicle_yaml = kRoot + "/config/vehicle.yaml";
   o.world_yaml = kRoot + "/config/sim_world.yaml";
   o.drive_yaml = kRoot + "/config/sim_drive.yaml";
-  o.max_frames = 60;
-  o.frame_spacing_s = 2.0;
-  o.duration_s = 300.0;
-  // Three drives, seeds used neither for training (Monaco seeds 1-40) nor for the model card's
-  // validation (West Oakland seeds 101-112). One drive had too few pixels of the rare classes for
-  // an IoU to mean much (9,400 dashed-line, 26,000 right-lane pixels in seed 4242's 60 frames).
-  const uint64_t kSeeds[] = {4242, 4243, 4244};
+  o.max_frames = frames_per_seed;
+  o.frame_spacing_s = spacing_s;
+  o.duration_s = duration_s;
   seg::ConfusionMatrix cm(11);
-  int frames = 0;
-  for (const uint64_t seed : kSeeds) {
+  for (const uint64_t seed : seeds) {
     o.seed = seed;
     seg::renderSimFrames(o, [&](const seg::SimFrame& f) {
       const cv::Mat labels = model.segment(f.bgr);
       EXPECT_EQ(labels.size(), f.labels.size());
       cm.add(f.labels, labels);
-      ++frames;
+      if (pooled) pooled->add(f.labels, labels);
+      ++*frames;
       return true;
     });
   }
-  ASSERT_GE(frames, 60);
-  std::printf("lanesegnet on %d held-out West Oakland frames (seeds %llu-%llu), 640x360:\n", frames,
-              static_cast<unsigned long long>(kSeeds[0]), static_cast<unsigned long long>(std::end(kSeeds)[-1]));
+  return cm;
+}
+
+double printIou(const std::string& what, int frames, const seg::ConfusionMatrix& cm) {
+  std::printf("lanesegnet on %d frames of %s, 640x360:\n", frames, what.c_str());
   for (int c = 0; c < 11; ++c)
     std::printf("  %-17s IoU %.3f  (%lld truth pixels)\n", kClassNames[c], cm.iou(c),
                 static_cast<long long>(cm.truthPixels(c)));
@@ -84,13 +84,29 @@ TEST(SegModel, IouOnHeldOutWestOakland) {
   for (int c = 0; c < 11; ++c) all[c] = c;
   const double miou = cm.meanIou(all);
   std::printf("  mIoU %.3f, pixel accuracy %.3f\n", miou, cm.pixelAccuracy());
+  return miou;
+}
+
+}  // namespace
+
+TEST(SegModel, IouOnHeldOutWestOakland) {
+  seg::Segmenter model(shippedModel());
+  // Three drives of a network never trained on, with seeds used neither for the model card's
+  // validation (West Oakland seeds 101-112) nor by the broad benchmark (1-2). One drive had too few
+  // pixels of the rare classes for an IoU to mean much (9,400 dashed-line, 26,000 right-lane pixels
+  // in seed 4242's 60 frames).
+  int frames = 0;
+  const seg::ConfusionMatrix cm = scoreShippedModel(model, "west-oakland.osm", {4242, 4243, 4244}, 60, 2.0, 300.0, &frames);
+  ASSERT_GE(frames, 60);
+  const double miou = printIou("held-out West Oakland (seeds 4242-4244)", frames, cm);
 
   // The bar: 0.75 IoU for the ego / left / right lanes and the lane markings. Measured here
   // with the shipped model (lanesegnet-v3, models/README.md): ego 0.958, left 0.950, right 0.905,
   // dashed 0.848, solid 0.910, crosswalk 0.914, curb 0.849, mIoU 0.784. All five bar classes are
   // asserted at the bar, and every class at what was measured less a margin, so a worse model fails:
   // lanesegnet-v2 here has right 0.761, dashed 0.762, solid 0.874, mIoU 0.740 (right 0.562 on
-  // seed 4242 alone) and fails six of the margins.
+  // seed 4242 alone) and fails six of the margins; lanesegnet-v4 (trained on nine networks, not
+  // shipped) has right 0.804, dashed 0.806 and fails two.
   EXPECT_GE(cm.iou(1), 0.75);   // ego lane
   EXPECT_GE(cm.iou(2), 0.75);   // left lane
   EXPECT_GE(cm.iou(3), 0.75);   // right lane
@@ -105,6 +121,48 @@ TEST(SegModel, IouOnHeldOutWestOakland) {
   EXPECT_GT(cm.iou(8), 0.89);   // crosswalk
   EXPECT_GT(cm.iou(9), 0.82);   // curb
   EXPECT_GT(miou, 0.76);
+}
+
+TEST(SegModel, IouOnHeldOutDevNetworks) {
+  seg::Segmenter model(shippedModel());
+  // Four data/osm/dev networks the model never saw (the shipped model was trained on Monaco alone;
+  // tools/seg/train.sh's HELD_OUT, which RECIPE=many keeps out of training too): a highway exit
+  // ramp, a multi-lane junction, a city grid, a roundabout. One drive each, seed 4242 (neither the
+  // card's validation seeds 101-104 nor the benchmark's 1-2). Measured with lanesegnet-v3: the ego
+  // lane 0.886 (i5), 0.626 (kingsway), 0.888 (neukolln), 0.976 (perth); pooled ego 0.880, left
+  // 0.885, right 0.902, dashed 0.889, solid 0.872, mIoU 0.792. Asserted less a margin: a model that
+  // generalises worse fails. lanesegnet-v4 (models/README.md) passes all but kingsway's ego lane
+  // (0.536), with pooled ego 0.914, left 0.910, right 0.942, mIoU 0.804.
+  struct Network {
+    const char* osm;
+    double min_ego_iou;
+  };
+  const Network kNetworks[] = {{"dev/i5_exit_ramp.osm", 0.86},
+                               {"dev/kingsway_junction.osm", 0.59},
+                               {"dev/neukolln.osm", 0.86},
+                               {"dev/perth_peanut_roundabout.osm", 0.95}};
+  seg::ConfusionMatrix pooled(11);
+  int frames = 0;
+  for (const Network& net : kNetworks) {
+    int n = 0;
+    const seg::ConfusionMatrix cm = scoreShippedModel(model, net.osm, {4242}, 30, 2.5, 100.0, &n, &pooled);
+    EXPECT_GE(n, 15) << net.osm;
+    printIou(std::string(net.osm) + " (held out, seed 4242)", n, cm);
+    EXPECT_GT(cm.iou(1), net.min_ego_iou) << net.osm;
+    frames += n;
+  }
+  const double miou = printIou("the four held-out dev networks", frames, pooled);
+  EXPECT_GE(pooled.iou(1), 0.75);  // the bar, as on West Oakland
+  EXPECT_GE(pooled.iou(2), 0.75);
+  EXPECT_GE(pooled.iou(3), 0.75);
+  EXPECT_GE(pooled.iou(6), 0.75);
+  EXPECT_GE(pooled.iou(7), 0.75);
+  EXPECT_GT(pooled.iou(1), 0.86);  // ego lane
+  EXPECT_GT(pooled.iou(2), 0.865); // left lane
+  EXPECT_GT(pooled.iou(3), 0.88);  // right lane
+  EXPECT_GT(pooled.iou(6), 0.87);  // dashed line
+  EXPECT_GT(pooled.iou(7), 0.85);  // solid line
+  EXPECT_GT(miou, 0.77);
 }
 
 TEST(SegModel, MissingModelIsAClearError) {

@@ -18,6 +18,9 @@
 #   LIDAR=1           BEV on the LIDAR ground mesh (0: --no-lidar, flat plane; faster)
 #   JOBS=$(nproc)     drives simulated and mapped at once
 #   REPROJECT=1       project the drives again (after a change to segmentation, BEV or road tracking)
+#   TRAINED_ON=monaco the networks the segmentation model was trained on (comma-separated; the
+#                     shipped model: Monaco, models/README.md): the model's rows are also pooled
+#                     over those and over the networks it never saw
 # Drives already simulated in OUT_DIR are reused, and so are their projections (neither depends on
 # the mapping stages: after a change there, run again on the same OUT_DIR); the maps and scores are
 # always made anew.
@@ -105,4 +108,4 @@ printf '%s\n' "${tasks[@]}" | xargs -P "$jobs" -L 1 bash -c '
   sim_flags=($sim_flags_str); map_flags=($map_flags_str); run_one "$0" "$1"'
 echo "   wall $(( $(date +%s) - t0 )) s"
 
-python3 "$root/tools/bench/quality_table.py" "$out" $labels
+python3 "$root/tools/bench/quality_table.py" "$out" $labels --trained-on "${TRAINED_ON:-monaco}"

@@ -8,7 +8,12 @@ all drives, connection RMS over the correct pairs (each drive's mean weighted by
 A drive whose mapping failed outright is scored as an empty map: every driven truth lane and
 pair missed.
 
-Usage: quality_table.py OUT_DIR LABEL [LABEL ...]   (also writes OUT_DIR/quality.json)
+With --trained-on a,b,c (the networks the segmentation model was trained on, rendered with other
+seeds than the benchmark's; quality.sh passes TRAINED_ON) two more pooled rows for the model's
+labels split the networks by whether the model saw them.
+
+Usage: quality_table.py OUT_DIR LABEL [LABEL ...] [--trained-on NET,NET,...]
+       (also writes OUT_DIR/quality.json)
 """
 import json
 import math
@@ -62,8 +67,20 @@ def fmt(v):
     return "   -  " if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:6.3f}"
 
 
+def trained_networks(argv):
+    """--trained-on NET,NET,... (removed from argv): the networks the model was trained on."""
+    if "--trained-on" not in argv:
+        return set()
+    i = argv.index("--trained-on")
+    names = argv[i + 1].split(",") if i + 1 < len(argv) else []
+    del argv[i:i + 2]
+    return set(n for n in names if n)
+
+
 def main():
-    out, labels = sys.argv[1], sys.argv[2:]
+    argv = sys.argv[1:]
+    trained = trained_networks(argv)
+    out, labels = argv[0], argv[1:]
     drives = sorted(d for d in os.listdir(out) if os.path.isdir(os.path.join(out, d, "drive")))
     result = {}
     for lab in labels:
@@ -85,6 +102,18 @@ def main():
                f"{'junc P':>6s} {'junc R':>6s} {'conn m':>6s}  {'lanes det/built/truth':>22s} {'pairs ok/built/truth':>21s}"
         print(head)
         rows = sorted(per_net.items()) + [("POOLED", total)]
+        if lab != "oracle" and trained & set(per_net):
+            # The networks pooled by whether the model was trained on them.
+            result[lab]["groups"] = {}
+            for group, member in (("model trained on", lambda n: n in trained),
+                                  ("model never saw", lambda n: n not in trained)):
+                nets = sorted(n for n in per_net if member(n))
+                c = {}
+                for n in nets:
+                    c = add(c, per_net[n])
+                if nets:
+                    rows.append((f"POOLED, {group} ({len(nets)})", c))
+                    result[lab]["groups"][group] = {**figures(c), "counts": c, "networks": nets}
         for n, c in rows:
             f = figures(c)
             print(f"   {n:28s} {c.get('drives', 0):6d} " + " ".join(fmt(f[k]) for k in KEYS) +

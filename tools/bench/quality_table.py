@@ -8,9 +8,10 @@ all drives, connection RMS over the correct pairs (each drive's mean weighted by
 A drive whose mapping failed outright is scored as an empty map: every driven truth lane and
 pair missed.
 
-With --trained-on a,b,c (the networks the segmentation model was trained on, rendered with other
-seeds than the benchmark's; quality.sh passes TRAINED_ON) two more pooled rows for the model's
-labels split the networks by whether the model saw them.
+With --trained-on a,b,c (the networks whose frames the segmentation model was trained on;
+quality.sh passes TRAINED_ON) two more pooled rows for the model's labels split the networks by
+whether the model saw them. (The shipped model's Monaco frames came from seeds 1-40, the
+benchmark's seeds among them; train.sh's RECIPE=many renders seeds 201 and up.)
 
 Usage: quality_table.py OUT_DIR LABEL [LABEL ...] [--trained-on NET,NET,...]
        (also writes OUT_DIR/quality.json)

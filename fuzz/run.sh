@@ -3,7 +3,8 @@
 # FUZZ_SECONDS (default 60) on one core, starting from fuzz/corpus/<h> and fuzz/regressions/<h>.
 # New corpus entries go to build-fuzz/corpus/<h> (not into the repository); a crash, sanitizer
 # report, leak, timeout (> 10 s per input) or out-of-memory (> 2 GB) is saved to
-# build-fuzz/artifacts/<h>/ and makes the script exit 1. A table of runs, seconds and crashes is
+# build-fuzz/artifacts/<h>/ and makes the script exit 1 (harnesses that do not configure or build:
+# exit 3, so CI can tell a broken build from a finding). A table of runs, seconds and crashes is
 # printed and written to build-fuzz/fuzz-summary.txt.
 #   fuzz/run.sh [HARNESS...]          FUZZ_SECONDS=300 fuzz/run.sh lcm_decode
 # To replay a crash: build-fuzz/fuzz_<h> build-fuzz/artifacts/<h>/crash-...; once fixed, copy it to
@@ -17,9 +18,9 @@ CCACHE=()
 command -v ccache >/dev/null && CCACHE=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
 if [ ! -f "$BUILD/CMakeCache.txt" ]; then
   cmake -S fuzz -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
-    -DCMAKE_C_COMPILER=clang "${CCACHE[@]}" > "$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log"; exit 1; }
+    -DCMAKE_C_COMPILER=clang "${CCACHE[@]}" > "$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log"; exit 3; }
 fi
-cmake --build "$BUILD" -j"$JOBS"
+cmake --build "$BUILD" -j"$JOBS" || { echo "fuzz: the harnesses do not build" >&2; exit 3; }
 harnesses=("$@")
 if [ ${#harnesses[@]} -eq 0 ]; then
   for f in fuzz/harness/*.cc; do harnesses+=("$(basename "$f" .cc)"); done

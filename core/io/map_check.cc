@@ -4,8 +4,8 @@
 #include "core/geo/local_frame.h"
 #include "core/geo/polyline.h"
 #include "core/io/atomic_file.h"
-#include "core/io/read_file.h"
 #include "core/io/lanelet2.h"
+#include "core/io/read_file.h"
 #include "core/osm/coordinate_guard.h"
 
 #include <nlohmann/json.hpp>

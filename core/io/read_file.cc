@@ -1,5 +1,6 @@
 #include "core/io/read_file.h"
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <iterator>

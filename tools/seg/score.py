@@ -41,9 +41,10 @@ def main():
         frames[names[-1]] = len(full)
     names.append("pooled")
     columns.append(pooled)
+    frames["pooled"] = sum(frames.values())
     table = {n: ious(cm) for n, cm in zip(names, columns)}
     fmt = lambda v: "-" if np.isnan(v) else "%.3f" % v  # noqa: E731
-    print("| class | " + " | ".join("%s (%d)" % (n, frames.get(n, sum(frames.values()))) for n in names) + " |")
+    print("| class | " + " | ".join("%s (%d)" % (n, frames[n]) for n in names) + " |")
     print("|---" * (len(names) + 1) + "|")
     for c, name in enumerate(CLASS_NAMES):
         print("| %s | " % name + " | ".join(fmt(table[n][c]) for n in names) + " |")
@@ -53,7 +54,7 @@ def main():
         print("| %s | " % name + " | ".join("%.0f" % (cm[c].sum() / 1000.0) for cm in columns) + " |")
     if args.json:
         with open(args.json, "w") as f:
-            json.dump({n: {"frames": frames.get(n, sum(frames.values())),
+            json.dump({n: {"frames": frames[n],
                            "iou": {c: (None if np.isnan(v) else round(float(v), 4)) for c, v in zip(CLASS_NAMES, table[n])},
                            "miou": round(float(np.nanmean(table[n])), 4),
                            "truth_pixels": {c: int(cm[i].sum()) for i, c in enumerate(CLASS_NAMES)}}

@@ -64,8 +64,8 @@ int main(int argc, char** argv) {
                 road->length, geometry.s_begin, geometry.s_end, stretch.s_begin, stretch.s_end,
                 geometry.two_way ? "two-way" : "one-way");
     const auto& st = res.stats;
-    std::printf("%d steps, %d births, %lld deaths, %d tracks, %zu lanes\n", st.steps, st.births,
-                static_cast<long long>(st.deaths), st.tracks, res.lanes.size());
+    std::printf("%d steps, %d births, %lld deaths, %d tracks (%d joined as pieces of a lane), %zu lanes\n", st.steps,
+                st.births, static_cast<long long>(st.deaths), st.tracks, st.pieces_joined, res.lanes.size());
     std::printf("raster cells:");
     for (int c = 0; c < 8; ++c) {
       std::printf(" %s %lld", lanes::toString(static_cast<lanes::RasterClass>(c)), static_cast<long long>(st.raster_cells[c]));

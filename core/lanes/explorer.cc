@@ -374,6 +374,7 @@ struct Track {
   bool initial = false;       // started with the start strip
   int parent = -1, merge_into = -1;
   std::vector<double> sum, cnt;  // per s-bin
+  bool joined = false;           // its samples went to an earlier piece of its lane (joinLanePieces)
 };
 
 }  // namespace
@@ -773,6 +774,103 @@ void dropLanes(const std::vector<bool>& drop, std::vector<Lane>* lanes) {
   *lanes = std::move(kept);
 }
 
+// A track's first and last binned samples: [s0, s1) and the mean offset over its first (last)
+// three bins with samples. False when it has none.
+struct TrackEnds {
+  double s0, s1, d0, d1;
+};
+bool trackEnds(const Track& tr, double bin_m, TrackEnds* e) {
+  const int n = static_cast<int>(tr.cnt.size());
+  int b0 = 0, b1 = n - 1;
+  while (b0 < n && tr.cnt[b0] <= 0) ++b0;
+  while (b1 >= 0 && tr.cnt[b1] <= 0) --b1;
+  if (b0 > b1) return false;
+  auto meanOf = [&](int from, int step) {
+    double s = 0, c = 0;
+    for (int b = from, k = 0; b >= b0 && b <= b1 && k < 3; b += step) {
+      if (tr.cnt[b] <= 0) continue;
+      s += tr.sum[b];
+      c += tr.cnt[b];
+      ++k;
+    }
+    return s / c;
+  };
+  *e = {b0 * bin_m, (b1 + 1) * bin_m, meanOf(b0, 1), meanOf(b1, -1)};
+  return true;
+}
+
+// A lane seen in pieces is one lane: the particles in a lane whose line or kerb the camera saw
+// smeared (the far lane of a wide road, a worn line) die where a footprint touches a stray
+// boundary cell, and births start its lane again farther on as a new track. A track that ended
+// (no particles for lane_gap_max_m) and a track that starts at most join_gap_max_m after it, within
+// same_lane_m of the offset it ended at, are joined when the straight line between them (every
+// metre, in the raster) crosses observed drivable ground in join_min_drivable_share of its metres
+// and no other track holds that offset there (within same_lane_m, in over a tenth of the metres): a
+// bay out of a lane and back, then a kerb, then another bay is not one lane, nor a lane that another
+// lane's particles took over. The later track's samples go to the earlier one, which takes its end
+// and its merge; tracks that named it as parent or merge resolve to the earlier one (fitLanes).
+// The regression then bridges the gap with a straight piece in (s, d).
+int joinLanePieces(const Raster& R, const ExplorerOptions& o, std::vector<Track>* tracks) {
+  if (o.join_gap_max_m <= 0) return 0;
+  auto& T = *tracks;
+  std::vector<TrackEnds> ends(T.size());
+  std::vector<bool> has(T.size());
+  for (size_t t = 0; t < T.size(); ++t) has[t] = trackEnds(T[t], o.bin_m, &ends[t]);
+  auto offsetAt = [&](const Track& tr, double s, double* d) {
+    const int b = static_cast<int>(std::floor(s / o.bin_m));
+    if (b < 0 || b >= static_cast<int>(tr.cnt.size()) || tr.cnt[b] <= 0) return false;
+    *d = tr.sum[b] / tr.cnt[b];
+    return true;
+  };
+  auto gapIsLane = [&](size_t a, size_t b) {
+    const double s0 = ends[a].s1, s1 = ends[b].s0;
+    int n = 0, drivable = 0, held = 0;
+    for (double s = s0 + 0.5; s < s1; s += 1.0, ++n) {
+      const double d = ends[a].d1 + (ends[b].d0 - ends[a].d1) * (s - s0) / (s1 - s0);
+      const int i = R.row(s), j = R.col(d);
+      drivable += i >= 0 && i < R.ns && j >= 0 && j < R.nd && R.at(i, j) == kDrivable;
+      for (size_t t = 0; t < T.size(); ++t) {
+        double dt;
+        if (t != a && t != b && !T[t].joined && offsetAt(T[t], s, &dt) && std::abs(dt - d) < o.same_lane_m) {
+          ++held;
+          break;
+        }
+      }
+    }
+    return drivable >= o.join_min_drivable_share * n && held <= 0.1 * n;
+  };
+  int joined = 0;
+  for (size_t a = 0; a < T.size(); ++a) {
+    while (has[a] && !T[a].joined && !T[a].active) {
+      int best = -1;
+      for (size_t b = 0; b < T.size(); ++b) {
+        if (b == a || !has[b] || T[b].joined || T[b].initial) continue;
+        const double gap = ends[b].s0 - ends[a].s1;
+        if (gap < 0 || gap > o.join_gap_max_m || std::abs(ends[b].d0 - ends[a].d1) >= o.same_lane_m) continue;
+        if (best < 0 || ends[b].s0 < ends[best].s0) best = static_cast<int>(b);
+      }
+      if (best < 0 || !gapIsLane(a, best)) break;
+      Track& A = T[a];
+      Track& B = T[best];
+      for (size_t k = 0; k < A.cnt.size(); ++k) {
+        A.sum[k] += B.sum[k];
+        A.cnt[k] += B.cnt[k];
+      }
+      A.active = B.active;
+      A.d = B.d;
+      A.last_seen_s = B.last_seen_s;
+      A.last_alive_s = B.last_alive_s;
+      A.merge_into = B.merge_into == static_cast<int>(a) ? -1 : B.merge_into;
+      ends[a].s1 = ends[best].s1;
+      ends[a].d1 = ends[best].d1;
+      B.joined = true;
+      B.parent = B.merge_into = static_cast<int>(a);
+      ++joined;
+    }
+  }
+  return joined;
+}
+
 // Fit (METHOD.md section 4, step 4): the tracks long enough become lanes, each regressed as d(s)
 // (Eq. 6: piecewise linear with optimised break points, then a natural cubic spline); a lane that
 // began with the start strip is carried back to the road's start when the road was seen from
@@ -783,6 +881,7 @@ std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const Ro
   std::vector<Lane> lanes;
   std::vector<int> keep_index(tracks.size(), -1);
   for (const auto& tr : tracks) {
+    if (tr.joined) continue;
     const double s_end = tr.active ? s_stop : tr.last_alive_s;
     const double s_beg = tr.initial && seen_from_start ? std::max(road.s_begin, 0.0) : tr.first_s;
     double support = 0.0;
@@ -1079,7 +1178,9 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
 
   // 4-5. Centre lines, way-points, boundaries.
   t0 = Clock::now();
-  res.lanes = fitLanes(filter.tracks(), filter.bins(), road, s_stop, min_lane_length, filter.seenFromStart(), o);
+  std::vector<Track> tracks = filter.tracks();
+  res.stats.pieces_joined = joinLanePieces(R, o, &tracks);
+  res.lanes = fitLanes(tracks, filter.bins(), road, s_stop, min_lane_length, filter.seenFromStart(), o);
   dropLanesOnNothing(R, o, &res.lanes);
   dropFloatingLanes(o, &res.lanes);
   probeBoundaries(R, *frame, o, &res.lanes);

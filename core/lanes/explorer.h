@@ -107,6 +107,7 @@ struct ExplorationStats {
   int64_t particle_steps = 0;  // particles moved and tested
   int64_t deaths = 0;
   int tracks = 0;              // lane tracks before dropping short ones
+  int pieces_joined = 0;       // tracks joined to an earlier one as one lane (joinLanePieces)
   // Cells of the straightened raster per class: unobserved, drivable, blocked, separation, dashed,
   // solid, curb, outside (our direction's carriageway ends there).
   std::array<int64_t, 8> raster_cells{};

@@ -67,6 +67,8 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("bulge_density_fraction", o.bulge_density_fraction);
   r.read("min_drivable_share", o.min_drivable_share);
   r.read("weak_density_fraction", o.weak_density_fraction);
+  r.read("join_gap_max_m", o.join_gap_max_m);
+  r.read("join_min_drivable_share", o.join_min_drivable_share);
   r.read("floating_lane_max_m", o.floating_lane_max_m);
   r.read("bin_m", o.bin_m);
   r.read("break_spacing_m", o.break_spacing_m);
@@ -101,6 +103,8 @@ void ExplorerOptions::validate() const {
        "carry_lanes_max_m >= 0 and carry_max_turn_rad in [0, 1.6)");
   need(min_drivable_share >= 0 && min_drivable_share <= 1, "min_drivable_share in [0, 1]");
   need(floating_lane_max_m >= 0, "floating_lane_max_m >= 0");
+  need(join_gap_max_m >= 0 && std::isfinite(join_gap_max_m), "join_gap_max_m >= 0");
+  need(join_min_drivable_share >= 0 && join_min_drivable_share <= 1, "join_min_drivable_share in [0, 1]");
   need(kill_min_count >= 1, "kill_min_count >= 1");
   need(drivable_fraction >= 0 && drivable_fraction <= 1, "drivable_fraction in [0, 1]");
   need(drivable_min_count >= 0, "drivable_min_count >= 0");

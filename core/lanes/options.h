@@ -100,6 +100,11 @@ struct ExplorerOptions {
   double weak_density_fraction = 0.05;   // any lane with fewer particles per metre than this
                                          //   fraction of a lane over most of its stretch is
                                          //   dropped (0: never)
+  double join_gap_max_m = 200.0;         // a lane the particles lost and found again at its offset
+                                         //   this far on, over drivable ground no other lane holds,
+                                         //   is one lane (0: never join)
+  double join_min_drivable_share = 0.8;  // ... drivable: the straight line between the pieces, in
+                                         //   at least this share of its metres
   double floating_lane_max_m = 100.0;    // a lane shorter than this beside a lane seen lane_gap_max_m
                                          //   before and after it (not a bay: out of a lane and back
                                          //   into it on the kerb side) is a glimpse of a far lane,

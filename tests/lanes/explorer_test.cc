@@ -225,6 +225,54 @@ TEST(Explorer, BusBay) {
   EXPECT_EQ(rep.result.laneCountAt(170.0), 2);
 }
 
+// Issue 16, the benchmark's I-5 case: the kerb-side lane of a wide road is seen with stray line
+// labels over it in stretches (its kerb or line smeared by the projection), each longer than
+// lane_gap_max_m: the particles there die, births start the lane again after each, and without
+// joining it is three lanes, the later two split off the middle lane and back into it on the kerb
+// side (so kept as bays). A lane lost and found again at its offset, over ground seen drivable
+// that no other lane holds, is one lane: found whole, within 0.15 m.
+TEST(Explorer, ALaneSeenInPiecesIsOneLane) {
+  Scenario sc = straightLanes({3.5, 3.5, 3.5}, 400.0);
+  for (const double s0 : {100.0, 220.0}) sc.layout.speckles.push_back({s0, s0 + 40.0, -5.2, -1.9, 0.05});
+  const Report rep = run(sc);
+  expectLanes(rep, sc);
+  EXPECT_EQ(rep.result.stats.pieces_joined, 2);
+  for (const Lane& l : rep.result.lanes) {
+    EXPECT_LT(l.s_begin, 5.0) << "lane " << l.id;
+    EXPECT_GT(l.s_end, 395.0) << "lane " << l.id;
+  }
+  EXPECT_EQ(rep.result.laneCountAt(120.0), 3) << "the lane runs on where it was lost";
+  ExplorerOptions off;
+  off.join_gap_max_m = 0.0;
+  const Report pieces = run(sc, 1, off);
+  EXPECT_EQ(pieces.result.lanes.size(), 5u) << "without joining: the right lane in three pieces";
+  EXPECT_EQ(pieces.result.laneCountAt(120.0), 2);
+}
+
+// Two bus bays 70 m apart at one offset, a kerb between them: not one lane (the straight line
+// between them crosses no ground seen drivable; without that test they are joined).
+TEST(Explorer, TwoBusBaysAreNotJoined) {
+  Scenario sc = straightLanes({3.5, 3.5}, 320.0);
+  const double er = -3.5, bw = 3.0;
+  auto bayEdge = [=](double s) {
+    return er - 0.5 - bw * (ramp(80, 90, 0, 1)(s) - ramp(120, 130, 0, 1)(s) + ramp(200, 210, 0, 1)(s) - ramp(240, 250, 0, 1)(s));
+  };
+  for (auto& ln : sc.layout.lines) {
+    if (ln.kind == Line::kCurb && ln.d(0) < 0) ln.d = bayEdge;
+  }
+  sc.layout.areas[0].dlo = bayEdge;
+  for (const double s0 : {88.0, 208.0}) sc.truth.push_back({[=](double s) { return (er + bayEdge(s)) / 2; }, s0, s0 + 34.0});
+  const Report rep = run(sc);
+  expectLanes(rep, sc);
+  EXPECT_EQ(rep.result.stats.pieces_joined, 0);
+  EXPECT_EQ(rep.result.laneCountAt(105.0), 3);
+  EXPECT_EQ(rep.result.laneCountAt(165.0), 2);
+  EXPECT_EQ(rep.result.laneCountAt(225.0), 3);
+  ExplorerOptions any_ground;
+  any_ground.join_min_drivable_share = 0.0;
+  EXPECT_EQ(run(sc, 1, any_ground).result.stats.pieces_joined, 1) << "the kerb is what keeps them apart";
+}
+
 TEST(Explorer, AFarLaneGlimpsedMidRoadIsNoLane) {
   // Three lanes, 300 m; the car in the middle one sees the right one throughout, the left one only
   // from s = 130 to 170 (between passing trucks): elsewhere left of the dashed line beside it is
@@ -540,6 +588,7 @@ TEST(Explorer, NoLanesOfSpeckledGround) {
   ExplorerOptions off;
   off.bulge_density_fraction = 0.0;
   off.floating_lane_max_m = 0.0;  // which drops such pieces too, on the side away from the kerb
+  off.join_gap_max_m = 0.0;       // (joined, the pieces are one lane too thin to keep: weak_density_fraction)
   const Report without = run(sc, 1, off);
   EXPECT_GE(without.result.lanes.size(), 4u) << "without the rule the pieces are lanes";
   for (const Lane& l : without.result.lanes) {

@@ -38,12 +38,15 @@ std::array<double, 3> triple(const config::YamlReader& r, const char* key, std::
 
 ModelConfig ModelConfig::fromSegmenterConfig(const YAML::Node& config, const std::string& model_path,
                                               const std::string& base_dir) {
-  YAML::Node node = config["model"] ? YAML::Clone(config["model"]) : YAML::Node(YAML::NodeType::Map);
-  if (!model_path.empty()) {
-    node["path"] = model_path;
-    if (!config["model"] || !config["model"]["name"]) node.remove("name");
+  const YAML::Node node = config["model"] ? YAML::Clone(config["model"]) : YAML::Node(YAML::NodeType::Map);
+  try {
+    const config::YamlReader r(node);
+    ModelConfig c = fromYaml(r, base_dir, model_path);
+    r.finish();
+    return c;
+  } catch (const config::ConfigError& e) {
+    throw ModelError(std::string("model config: ") + e.what());
   }
-  return fromYaml(node, base_dir);
 }
 
 ModelConfig ModelConfig::fromYaml(const YAML::Node& node, const std::string& base_dir) {
@@ -59,15 +62,23 @@ ModelConfig ModelConfig::fromYaml(const YAML::Node& node, const std::string& bas
 }
 
 ModelConfig ModelConfig::fromYaml(const config::YamlReader& r, const std::string& base_dir, const std::string& model_path) {
+  auto resolve = [&](const std::string& path) {
+    if (!base_dir.empty() && fs::path(path).is_relative() && !fs::exists(path) && fs::exists(fs::path(base_dir) / path)) {
+      return (fs::path(base_dir) / path).lexically_normal().string();
+    }
+    return path;
+  };
   ModelConfig c;
-  c.path = model_path.empty() ? r.get<std::string>("path", "") : model_path;
-  if (!model_path.empty()) r.allow({"path"});  // replaced
+  const std::string configured = resolve(r.get<std::string>("path", ""));
+  c.path = model_path.empty() ? configured : resolve(model_path);
   if (c.path.empty()) r.fail("path", "(the ONNX file) is required");
-  if (!base_dir.empty() && fs::path(c.path).is_relative() && !fs::exists(c.path) &&
-      fs::exists(fs::path(base_dir) / c.path)) {
-    c.path = (fs::path(base_dir) / c.path).lexically_normal().string();
-  }
-  c.name = r.get<std::string>("name", fs::path(c.path).stem().string());
+  // The config's name names the config's file: a model given instead of it (another file) is
+  // named by its own stem, so a summary never credits one model with another's labels.
+  std::error_code ec;
+  const bool same_file = c.path == configured || fs::equivalent(c.path, configured, ec);
+  c.name = fs::path(c.path).stem().string();
+  if (same_file) r.read("name", c.name);
+  else r.allow({"name"});
   r.read("input_width", c.input_width);
   r.read("input_height", c.input_height);
   if (c.input_width < 8 || c.input_height < 8 || c.input_width > 8192 || c.input_height > 8192)

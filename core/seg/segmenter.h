@@ -63,12 +63,13 @@ struct ModelConfig {
   // when the file is not found as given. Throws ModelError naming the key.
   static ModelConfig fromYaml(const YAML::Node& node, const std::string& base_dir = "");
   // The same from a config section (config/segmenter.yaml `model:`), `model_path` (when not empty)
-  // instead of its path; errors are config::ConfigError naming the file and key.
+  // instead of its path; errors are config::ConfigError naming the file and key. The section's
+  // `name` names its own file: a model_path that is another file is named by its stem.
   static ModelConfig fromYaml(const config::YamlReader& r, const std::string& base_dir = "",
                               const std::string& model_path = "");
   // The `model:` block of a segmenter config (config/segmenter.yaml), its path replaced by
-  // `model_path` when that is not empty (the name then defaults to the new file's stem unless the
-  // config names the model): how lanemap-segmenter and lanemap-offline load the configured model.
+  // `model_path` when that is not empty (named by its stem unless it is the config's own file):
+  // how lanemap-segmenter and lanemap-offline load the configured model.
   static ModelConfig fromSegmenterConfig(const YAML::Node& config, const std::string& model_path = "",
                                          const std::string& base_dir = "");
 };

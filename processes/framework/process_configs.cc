@@ -136,7 +136,7 @@ SegmenterSettings SegmenterSettings::fromYaml(const config::YamlReader& r, const
   r.read("oracle", s.oracle);
   r.read("threads", s.threads);
   if (r.has("model") || !model_path.empty()) {
-    // With model_path, the name defaults to its stem unless the config names the model.
+    // With model_path, the model is named by its stem unless it is the config's own file.
     s.model = seg::ModelConfig::fromYaml(r.section("model"), shareDir().string(), model_path);
   }
   return s;

@@ -313,7 +313,11 @@ TEST(SegConfig, FromSegmenterConfigWithAndWithoutAModelOverride) {
   EXPECT_EQ(b.path, "/tmp/other.onnx");
   EXPECT_EQ(b.name, "other");  // the override's stem, not the config's file
   EXPECT_EQ(b.crop_top, 120);  // the rest of the block stays
-  EXPECT_EQ(seg::ModelConfig::fromSegmenterConfig(config, "/tmp/other.onnx").name, "v3");  // named in the config
+  // The config's name is its own file's: another model given in its place is named by its stem (a
+  // map's summary said "lanesegnet-v3" of another model's labels), the same file keeps it.
+  EXPECT_EQ(seg::ModelConfig::fromSegmenterConfig(config, "/tmp/other.onnx").name, "other");
+  EXPECT_EQ(seg::ModelConfig::fromSegmenterConfig(config, "models/lanesegnet.onnx", kRoot).name, "v3");
+  EXPECT_EQ(seg::ModelConfig::fromSegmenterConfig(config, kRoot + "/models/../models/lanesegnet.onnx", kRoot).name, "v3");
   EXPECT_THROW(seg::ModelConfig::fromSegmenterConfig(YAML::Load("{threads: 2}")), seg::ModelError);
 }
 

@@ -127,7 +127,8 @@ EvalReport evaluate(const map::LaneMap& truth, const map::LaneMap& built, const 
 
 // The report as JSON: lanes.{precision, recall, rms_m, miou, ...}, intersections.{precision,
 // recall, rms_m, ...}, lane_graph.{precision, recall}, chamfer_ap.{"0.5", "1.0", "1.5", centre,
-// boundary}, roads[] (per-road detail), lanes_detail[] (per truth lane), and stop_lines,
+// boundary}, roads[] (per-road detail), lanes_detail[] (per truth lane), built_lanes_detail[]
+// (per built lane: the truth lane it matched, IoU, RMS, coverage, detected), and stop_lines,
 // crosswalks, rules, lane_change (regulatory.h toJson). NaN -> null.
 nlohmann::json toJson(const EvalReport& report);
 // A few human-readable lines.

@@ -111,6 +111,27 @@ nlohmann::json toJson(const EvalReport& r) {
     lanes.push_back(l);
   }
   j["lanes_detail"] = lanes;
+  // Per built lane: what it matched, so a false lane can be found on the map (a built lane that
+  // detects nothing lowers precision).
+  std::vector<const LaneMatch*> by_built(r.built_lanes.size(), nullptr);
+  for (const auto& m : r.matches) by_built[m.built] = &m;
+  json built = json::array();
+  for (size_t b = 0; b < r.built_lanes.size(); ++b) {
+    const LaneInfo& li = r.built_lanes[b];
+    json l = {{"road_id", li.road_id}, {"length_m", li.length_m}, {"lanelets", li.lanelets}};
+    if (const LaneMatch* m = by_built[b]) {
+      l["truth_lanelets"] = r.truth_lanes[m->truth].lanelets;
+      l["iou"] = num(m->iou);
+      l["rms_m"] = num(m->rms_m);
+      l["coverage"] = num(m->coverage);
+      l["detected"] = m->detected;
+    } else {
+      l["truth_lanelets"] = json::array();
+      l["detected"] = false;
+    }
+    built.push_back(l);
+  }
+  j["built_lanes_detail"] = built;
   const json regulatory = toJson(r.regulatory);
   for (auto it = regulatory.begin(); it != regulatory.end(); ++it) j[it.key()] = it.value();
   return j;

@@ -278,15 +278,31 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
   if (o.unnamed_lanes) markUnnamedLanes(r, o, road.two_way);
   // Our carriageway: per bin along s, walk out from the road's centre line (or the nearest drivable
   // column to it) to the first wall (blocked or curb in most rows of the bin, at least
-  // carriageway_wall_m wide): a median, a sidewalk, a parking strip. Beyond it lie other roads
-  // (the other carriageway of a dual road, a parallel street) that are not this road's lanes. A
-  // parked car fills few rows of a bin and is no wall.
+  // carriageway_wall_m wide): a median, a sidewalk, a parking strip; or to the first kerb seen
+  // along kerb_wall_fraction of the bin's rows (within line_tolerance_m of one column: a kerb at
+  // a slant to the frame): a kerb with ground seen drivable beyond it (a side road's mouth, a
+  // parallel roadway, a forecourt) bounds this road as well. Not one within half a lane
+  // (lane_width_min_m / 2) of where the walk starts: the road's line runs along it (the gore of an
+  // exit ramp the line follows), so which side is this road's cannot be told. Beyond it lie other roads (the other
+  // carriageway of a dual road, a parallel street) that are not this road's lanes. A parked car
+  // fills few rows of a bin and is no wall.
   {
     const int bin_rows = std::max(1, static_cast<int>(std::round(o.divider_bin_m / r.res)));
     const int wall_cols = std::max(1, static_cast<int>(std::round(o.carriageway_wall_m / r.res)));
+    const int tol = static_cast<int>(std::round(o.line_tolerance_m / r.res));
+    const int kerb_min_cols = static_cast<int>(std::round(0.5 * o.lane_width_min_m / r.res));
+    std::vector<uint8_t> kerb_near(r.nd);
     for (int i0 = 0; i0 < r.ns; i0 += bin_rows) {
       const int i1 = std::min(r.ns, i0 + bin_rows);
-      std::vector<float> wall(r.nd), good(r.nd);
+      std::vector<float> wall(r.nd), good(r.nd), kerb(r.nd);
+      for (int i = i0; i < i1; ++i) {
+        std::fill(kerb_near.begin(), kerb_near.end(), 0);
+        for (int j = 0; j < r.nd; ++j) {
+          if (r.at(i, j) != kCurb) continue;
+          for (int jj = std::max(0, j - tol); jj <= std::min(r.nd - 1, j + tol); ++jj) kerb_near[jj] = 1;
+        }
+        for (int j = 0; j < r.nd; ++j) kerb[j] += kerb_near[j];
+      }
       for (int j = 0; j < r.nd; ++j) {
         int w = 0, g = 0;
         for (int i = i0; i < i1; ++i) {
@@ -296,6 +312,7 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
         }
         wall[j] = static_cast<float>(w) / (i1 - i0);
         good[j] = static_cast<float>(g) / (i1 - i0);
+        kerb[j] /= (i1 - i0);
       }
       int start = -1;
       for (int k = 0; k < r.nd && start < 0; ++k) {
@@ -311,8 +328,10 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
         int run = 0;
         for (int j = start; j >= 0 && j < r.nd; j += dir) {
           run = wall[j] >= 0.8f ? run + 1 : 0;
-          if (run < wall_cols) continue;
-          const int first_out = j - dir * (wall_cols - 1);
+          const bool kerb_line = o.kerb_wall_fraction > 0 && std::abs(j - start) >= kerb_min_cols && kerb[j] >= o.kerb_wall_fraction;
+          if (run < wall_cols && !kerb_line) continue;
+          // (a kerb: from about where it lies, line_tolerance_m past the first column near it)
+          const int first_out = kerb_line && run < wall_cols ? std::clamp(j + dir * tol, 0, r.nd - 1) : j - dir * (wall_cols - 1);
           for (int i = i0; i < i1; ++i) {
             for (int jj = first_out; jj >= 0 && jj < r.nd; jj += dir) {
               uint8_t& c = r.code[static_cast<size_t>(i) * r.nd + jj];

@@ -45,6 +45,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("divider_search_m", o.divider_search_m);
   r.read("divider_bin_m", o.divider_bin_m);
   r.read("carriageway_wall_m", o.carriageway_wall_m);
+  r.read("kerb_wall_fraction", o.kerb_wall_fraction);
   r.read("unnamed_lanes", o.unnamed_lanes);
   r.read("lane_width_min_m", o.lane_width_min_m);
   r.read("lane_width_max_m", o.lane_width_max_m);
@@ -114,6 +115,7 @@ void ExplorerOptions::validate() const {
   need(frame_smoothing_m >= 0, "frame_smoothing_m >= 0");
   need(divider_search_m >= 0 && divider_bin_m > 0, "divider_search_m, divider_bin_m");
   need(carriageway_wall_m > 0, "carriageway_wall_m > 0");
+  need(kerb_wall_fraction >= 0 && kerb_wall_fraction <= 1, "kerb_wall_fraction in [0, 1]");
   need(lane_width_min_m > 0 && lane_width_max_m >= lane_width_min_m, "0 < lane_width_min_m <= lane_width_max_m");
   need(line_tolerance_m >= 0 && line_tolerance_m < 0.5 * lane_width_min_m, "0 <= line_tolerance_m < lane_width_min_m / 2");
   need(birth_every_m > 0 && birth_min_free_m >= 0 && birth_particles >= 1, "births");

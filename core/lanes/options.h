@@ -53,6 +53,8 @@ struct ExplorerOptions {
   double divider_search_m = 3.0;         // look for the direction divider within this of d = 0
   double divider_bin_m = 10.0;           // along s (also the bins of the carriageway search)
   double carriageway_wall_m = 1.0;       // blocked/curb this wide (most of a bin) ends our carriageway
+  double kerb_wall_fraction = 0.7;       // ... so does a kerb seen along this share of a bin's rows
+                                         //   (within line_tolerance_m of one column; 0: only walls)
 
   // --- births: particles seeded where a footprint fits on observed drivable ground no particle
   // covers (turn pockets, bus bays, a lane behind a parked car); the paper's strip at the start is

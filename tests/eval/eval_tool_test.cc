@@ -67,6 +67,17 @@ TEST(EvalTool, JsonKeysAndValuesOnAMissingLane) {
   EXPECT_EQ(j["roads"][1]["truth_lanes"].get<int>(), 2);
   EXPECT_EQ(j["roads"][1]["built_lanes"].get<int>(), 1);
   EXPECT_EQ(j["lanes_detail"].size(), 5u);
+  // Per built lane: the four built lanes, each detecting the truth lane that names it back.
+  ASSERT_EQ(j["built_lanes_detail"].size(), 4u);
+  int built_detected = 0;
+  for (const auto& b : j["built_lanes_detail"]) {
+    if (!b["detected"].get<bool>()) continue;
+    ++built_detected;
+    bool named_back = false;
+    for (const auto& t : j["lanes_detail"]) named_back |= t["lanelets"] == b["truth_lanelets"] && t["built_lanelets"] == b["lanelets"];
+    EXPECT_TRUE(named_back) << b.dump();
+  }
+  EXPECT_EQ(built_detected, 4);
   EXPECT_NE(out.find("recall 0.800"), std::string::npos) << out;
 }
 

@@ -712,9 +712,29 @@ TEST(Explorer, NoLaneOfAFewParticlesBeyondTheKerb) {
   for (int t = 0; t < 2; ++t) EXPECT_EQ(rep.matched_truth.count(t), 1u) << "truth lane " << t;
   ExplorerOptions off;
   off.weak_density_fraction = 0.0;
+  off.kerb_wall_fraction = 0.0;  // (which ends the carriageway at the kerb: no particle beyond it)
   const Report without = run(sc, 1, off);
-  EXPECT_LT(weakest(without.result), defaults.weak_density_fraction) << "without the rule a weak lane is kept";
+  EXPECT_LT(weakest(without.result), defaults.weak_density_fraction) << "without the rules a weak lane is kept";
   EXPECT_GT(without.result.lanes.size(), rep.result.lanes.size());
+  ExplorerOptions kerb_only;
+  kerb_only.weak_density_fraction = 0.0;
+  EXPECT_EQ(run(sc, 1, kerb_only).result.lanes.size(), 2u);
+}
+
+// Issue 16, the benchmark's Monaco streets: beyond the right kerb of a two-lane road, a lane-wide
+// strip of ground seen drivable (a parallel roadway, a forecourt, a side road's mouth), clean. The
+// kerb, seen along the road, ends this road's carriageway (kerb_wall_fraction): two lanes. Without
+// it the strip is a third lane of this road.
+TEST(Explorer, NoLaneBeyondAKerbSeenAlongTheRoad) {
+  Scenario sc = straightLanes({3.5, 3.5}, 200.0);
+  sc.layout.areas.push_back({constant(-7.7), constant(-4.2)});
+  sc.layout.lines.push_back({constant(-7.9), -1e9, 1e9, Line::kCurb, false});
+  const Report rep = run(sc);
+  expectLanes(rep, sc);
+  ExplorerOptions off;
+  off.kerb_wall_fraction = 0.0;
+  const Report without = run(sc, 1, off);
+  EXPECT_EQ(without.result.lanes.size(), 3u) << "without the rule the strip beyond the kerb is a lane";
 }
 
 // Issue 16, a one-lane link between two traffic islands (the benchmark's Fremantle junction): 17 m

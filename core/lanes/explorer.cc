@@ -282,10 +282,10 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
   // along kerb_wall_fraction of the bin's rows (within line_tolerance_m of one column: a kerb at
   // a slant to the frame): a kerb with ground seen drivable beyond it (a side road's mouth, a
   // parallel roadway, a forecourt) bounds this road as well. Not one within half a lane
-  // (lane_width_min_m / 2) of where the walk starts: the road's line runs along it (the gore of an
-  // exit ramp the line follows), so which side is this road's cannot be told. Beyond it lie other roads (the other
-  // carriageway of a dual road, a parallel street) that are not this road's lanes. A parked car
-  // fills few rows of a bin and is no wall.
+  // (lane_width_min_m / 2) of where the walk starts: the road's line runs along it (the gore of
+  // an exit ramp the line follows), so which side is this road's cannot be told. Beyond the wall
+  // or kerb lie other roads (the other carriageway of a dual road, a parallel street) that are
+  // not this road's lanes. A parked car fills few rows of a bin and is no wall.
   {
     const int bin_rows = std::max(1, static_cast<int>(std::round(o.divider_bin_m / r.res)));
     const int wall_cols = std::max(1, static_cast<int>(std::round(o.carriageway_wall_m / r.res)));

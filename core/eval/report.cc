@@ -92,46 +92,35 @@ nlohmann::json toJson(const EvalReport& r) {
                      {"mean_rms_m", num(d.mean_rms_m)}});
   }
   j["roads"] = roads;
-  std::vector<const LaneMatch*> by_truth(r.truth_lanes.size(), nullptr);
-  for (const auto& m : r.matches) by_truth[m.truth] = &m;
-  json lanes = json::array();
-  for (size_t t = 0; t < r.truth_lanes.size(); ++t) {
-    const LaneInfo& li = r.truth_lanes[t];
-    json l = {{"road_id", li.road_id}, {"length_m", li.length_m}, {"lanelets", li.lanelets}};
-    if (const LaneMatch* m = by_truth[t]) {
-      l["built_lanelets"] = r.built_lanes[m->built].lanelets;
-      l["iou"] = num(m->iou);
-      l["rms_m"] = num(m->rms_m);
-      l["coverage"] = num(m->coverage);
-      l["detected"] = m->detected;
-    } else {
-      l["built_lanelets"] = json::array();
-      l["detected"] = false;
+  // Per lane of either map, the lane of the other map it matched (one to one) and how well:
+  // lanes_detail every truth lane (one not detected lowers recall), built_lanes_detail every built
+  // lane (one that detects nothing lowers precision, and can be found on the map by its lanelets).
+  auto laneDetail = [&](bool truth_side) {
+    const std::vector<LaneInfo>& own = truth_side ? r.truth_lanes : r.built_lanes;
+    const std::vector<LaneInfo>& other = truth_side ? r.built_lanes : r.truth_lanes;
+    const char* other_key = truth_side ? "built_lanelets" : "truth_lanelets";
+    std::vector<const LaneMatch*> match(own.size(), nullptr);
+    for (const auto& m : r.matches) match[truth_side ? m.truth : m.built] = &m;
+    json out = json::array();
+    for (size_t i = 0; i < own.size(); ++i) {
+      const LaneInfo& li = own[i];
+      json l = {{"road_id", li.road_id}, {"length_m", li.length_m}, {"lanelets", li.lanelets}};
+      if (const LaneMatch* m = match[i]) {
+        l[other_key] = other[truth_side ? m->built : m->truth].lanelets;
+        l["iou"] = num(m->iou);
+        l["rms_m"] = num(m->rms_m);
+        l["coverage"] = num(m->coverage);
+        l["detected"] = m->detected;
+      } else {
+        l[other_key] = json::array();
+        l["detected"] = false;
+      }
+      out.push_back(l);
     }
-    lanes.push_back(l);
-  }
-  j["lanes_detail"] = lanes;
-  // Per built lane: what it matched, so a false lane can be found on the map (a built lane that
-  // detects nothing lowers precision).
-  std::vector<const LaneMatch*> by_built(r.built_lanes.size(), nullptr);
-  for (const auto& m : r.matches) by_built[m.built] = &m;
-  json built = json::array();
-  for (size_t b = 0; b < r.built_lanes.size(); ++b) {
-    const LaneInfo& li = r.built_lanes[b];
-    json l = {{"road_id", li.road_id}, {"length_m", li.length_m}, {"lanelets", li.lanelets}};
-    if (const LaneMatch* m = by_built[b]) {
-      l["truth_lanelets"] = r.truth_lanes[m->truth].lanelets;
-      l["iou"] = num(m->iou);
-      l["rms_m"] = num(m->rms_m);
-      l["coverage"] = num(m->coverage);
-      l["detected"] = m->detected;
-    } else {
-      l["truth_lanelets"] = json::array();
-      l["detected"] = false;
-    }
-    built.push_back(l);
-  }
-  j["built_lanes_detail"] = built;
+    return out;
+  };
+  j["lanes_detail"] = laneDetail(true);
+  j["built_lanes_detail"] = laneDetail(false);
   const json regulatory = toJson(r.regulatory);
   for (auto it = regulatory.begin(); it != regulatory.end(); ++it) j[it.key()] = it.value();
   return j;

@@ -17,6 +17,8 @@
 // lanes mapped there as far as driven are scored, not counted against precision. The route comes from
 // lanemap-sim's scenario.json, or, for a recording scored against a surveyed map, from the log's
 // POSE map-matched to the OSM by the road tracker (the same as the live graph's road tracker).
+// Two atomic roads between the same two junctions (a street and the tunnel under it) are told apart
+// by scenario.json's road ids: only the one driven is scored.
 //
 // Both files are read in one ENU frame: the truth file's writer origin when its nodes carry
 // local_x/local_y (lanemap's files do), else its first node (see eval::lanelet2Origin).

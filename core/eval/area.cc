@@ -26,9 +26,25 @@ map::LaneMap restrictToMappedRoads(const map::LaneMap& truth, const map::LaneMap
 }
 
 map::LaneMap restrictToRoads(const map::LaneMap& truth, const std::set<RoadKey>& roads) {
+  return restrictToRoads(truth, roads, {});
+}
+
+map::LaneMap restrictToRoads(const map::LaneMap& truth, const std::set<RoadKey>& roads,
+                             const std::set<int64_t>& driven_road_ids) {
+  // The truth's atomic roads per kept (from, to): two or more are parallel roads between the same
+  // two junctions, of which driven_road_ids names the driven ones (when it names any).
+  std::map<RoadKey, std::set<int64_t>> ids;
+  for (const auto& l : truth.lanelets) {
+    if (l.kind == map::LaneletKind::kRoad && roads.count({l.from_node, l.to_node})) ids[{l.from_node, l.to_node}].insert(l.road_id);
+  }
+  const auto driven = [&](const map::Lanelet& l) {
+    const std::set<int64_t>& same_ends = ids[{l.from_node, l.to_node}];
+    if (same_ends.size() < 2 || driven_road_ids.count(l.road_id)) return true;
+    return std::none_of(same_ends.begin(), same_ends.end(), [&](int64_t id) { return driven_road_ids.count(id) > 0; });
+  };
   std::set<int64_t> keep;
   for (const auto& l : truth.lanelets) {
-    if (l.kind == map::LaneletKind::kRoad && roads.count({l.from_node, l.to_node})) keep.insert(l.id);
+    if (l.kind == map::LaneletKind::kRoad && roads.count({l.from_node, l.to_node}) && driven(l)) keep.insert(l.id);
   }
   std::set<int64_t> connectors;
   for (const auto& l : truth.lanelets) {
@@ -242,7 +258,7 @@ map::LaneMap restrictToDriven(const map::LaneMap& truth, const DrivenArea& area)
     cut = cutRoadAt(cut, e.road, e.start, CutKeep::kKeepAfter);
     roads.insert(e.road);
   }
-  return restrictToRoads(cut, roads);
+  return restrictToRoads(cut, roads, area.road_ids);
 }
 
 DrivenArea drivenAreaFromScenario(const std::string& path, const geo::LocalFrame& frame) {
@@ -251,6 +267,9 @@ DrivenArea drivenAreaFromScenario(const std::string& path, const geo::LocalFrame
   std::ifstream in(path);
   const nlohmann::json j = nlohmann::json::parse(in);
   const auto& route = j["route"];
+  for (const auto& r : route) {
+    if (r.contains("road_id") && r["road_id"].is_number_integer()) area.road_ids.insert(r["road_id"].get<int64_t>());
+  }
   if (route.empty() || !j.contains("origin")) return area;
   // The car's first and last positions: trajectory.csv's first and last rows
   // (t_s,utime,east_m,north_m,up_m,...), moved into `frame`.

@@ -37,6 +37,12 @@ namespace lanemap::eval {
 using RoadKey = std::pair<int64_t, int64_t>;
 
 map::LaneMap restrictToRoads(const map::LaneMap& truth, const std::set<RoadKey>& roads);
+// The same, where the truth joins two junctions by more than one atomic road (a street and the
+// tunnel under it, both from node A to node B): of those, only the ones in `driven_road_ids` (the
+// truth's road_id numbering) are kept, unless none of them is there (the ids are of another
+// numbering: then all are kept, as above).
+map::LaneMap restrictToRoads(const map::LaneMap& truth, const std::set<RoadKey>& roads,
+                             const std::set<int64_t>& driven_road_ids);
 map::LaneMap restrictToMappedRoads(const map::LaneMap& truth, const map::LaneMap& built);
 // The lanelets `keep` with their successors among them, their bound and stop lines, and the rules
 // and crosswalks over them (restricted to them; one over none of them is dropped).
@@ -68,13 +74,16 @@ struct DrivenArea {
   // The road the drive began on, when it was not also driven whole (none when the drive began in a
   // junction or drove that road again from its start).
   std::vector<EnteredDrive> entered;
+  // The route's atomic road ids (lanemap-sim numbers them as the truth's road_id): which of two
+  // roads between the same two junctions was driven. Empty: not known.
+  std::set<int64_t> road_ids;
 };
 
 // drivenRoadsFromScenario, and the road the drive ended on (the route's entry with left_utime
 // null) with the car's last position: the last row of trajectory.csv beside scenario.json (ENU of
 // the scenario's "origin"), moved into `frame`; the road it began on (the route's first entry,
 // when it is not in the route again) with the first row's position. Without trajectory.csv there
-// is no partial road and no entered one.
+// is no partial road and no entered one. road_ids: every route entry's road_id.
 DrivenArea drivenAreaFromScenario(const std::string& scenario_json_path, const geo::LocalFrame& frame);
 
 // The truth's lanelets of `road` cut at the line across the road through `at`: with kKeepBefore
@@ -88,9 +97,10 @@ enum class CutKeep { kKeepBefore, kKeepAfter };
 map::LaneMap cutRoadAt(const map::LaneMap& truth, const RoadKey& road, const Eigen::Vector2d& at,
                        CutKeep keep = CutKeep::kKeepBefore);
 
-// restrictToRoads of the roads driven to their end and the partial ones, the partial ones cut at
-// where the car stopped and the entered one where the car started (cutRoadAt); crosswalks on the
-// dropped side of a cut are dropped with the lanes there.
+// restrictToRoads of the roads driven to their end and the partial ones (of parallel roads between
+// the same junctions, those of area.road_ids), the partial ones cut at where the car stopped and
+// the entered one where the car started (cutRoadAt); crosswalks on the dropped side of a cut are
+// dropped with the lanes there.
 map::LaneMap restrictToDriven(const map::LaneMap& truth, const DrivenArea& area);
 
 }  // namespace lanemap::eval

@@ -77,6 +77,45 @@ TEST(DrivenArea, ADrivenRoadWithNoLanesCountsAsMissed) {
   EXPECT_EQ(by_driven.intersection_recall.hits, 0u);
 }
 
+// Two atomic roads between the same two junctions (Monaco: a street and the tunnel under it, both
+// from node A to node B): the route's road ids tell which one was driven. Keyed by (from, to)
+// alone, the other road's lane counted as driven and missed (seen on the broad benchmark).
+TEST(DrivenArea, OfTwoRoadsBetweenTheSameJunctionsOnlyTheDrivenOneCounts) {
+  LaneMap truth = network({});  // roads 1 (10->20, 2 lanes), 2 (20->30, 2 lanes), 3 (1 lane)
+  for (auto& l : truth.lanelets) {
+    if (l.road_id == 3) l.from_node = 20, l.to_node = 30;  // road 3 now also joins 20 to 30
+  }
+  LaneMap built;  // the mapper built roads 1 and 2, all the car drove
+  for (const auto& l : truth.lanelets) {
+    if (l.kind == LaneletKind::kRoad && l.road_id != 3) built.lanelets.push_back(l);
+  }
+  built.lines = truth.lines;
+  lanemap::eval::DrivenArea area;
+  area.roads = {{10, 20}, {20, 30}};
+  const auto roadIds = [](const LaneMap& m) {
+    std::set<int64_t> ids;
+    for (const auto& l : m.lanelets) if (l.kind == LaneletKind::kRoad) ids.insert(l.road_id);
+    return ids;
+  };
+  area.road_ids = {1, 2};
+  const LaneMap driven = lanemap::eval::restrictToDriven(truth, area);
+  EXPECT_EQ(roadIds(driven), (std::set<int64_t>{1, 2}));
+  size_t connectors = 0;
+  for (const auto& l : driven.lanelets) connectors += l.kind == LaneletKind::kIntersection;
+  EXPECT_EQ(connectors, 2u) << "A0->B0 and A1->B1; not A0->C0 into the road not driven";
+  const auto report = lanemap::eval::evaluate(driven, built);
+  EXPECT_EQ(report.lane_recall.total, 4u);
+  EXPECT_DOUBLE_EQ(report.lane_recall.value(), 1.0);
+  // Ids of another numbering (none of the parallel roads among them), or none: both kept, the
+  // road 3 lane counted as missed, as before.
+  for (const std::set<int64_t>& ids : {std::set<int64_t>{1, 99}, std::set<int64_t>{}}) {
+    area.road_ids = ids;
+    const LaneMap both = lanemap::eval::restrictToDriven(truth, area);
+    EXPECT_EQ(roadIds(both), (std::set<int64_t>{1, 2, 3}));
+    EXPECT_EQ(lanemap::eval::evaluate(both, built).lane_recall.total, 5u);
+  }
+}
+
 TEST(DrivenArea, RouteFromScenarioSkipsTheRoadTheDriveEndedOn) {
   lanemap::testing::TempDir dir("driven");
   {
@@ -87,6 +126,9 @@ TEST(DrivenArea, RouteFromScenarioSkipsTheRoadTheDriveEndedOn) {
   }
   EXPECT_EQ(lanemap::eval::drivenRoadsFromScenario(dir.str("scenario.json")),
             (std::set<lanemap::eval::RoadKey>{{10, 20}, {20, 30}}));
+  // Every entry's road id, the one it ended on included (its road is scored as far as driven).
+  EXPECT_EQ(lanemap::eval::drivenAreaFromScenario(dir.str("scenario.json"), lanemap::geo::LocalFrame({0, 0, 0})).road_ids,
+            (std::set<int64_t>{4, 7, 9}));
   {
     std::ofstream f(dir.str("bad.json"));
     f << R"({"seed": 1})";

@@ -3,7 +3,8 @@
 // lane: recall 4/5, intersection recall 2/3); lanelet2Origin recovers the writer's origin; the
 // simulator's ground truth (West Oakland world, built in-process) scores P = R = 1 against itself;
 // a foreign map (Lanelet2's Karlsruhe example) loads and scores against itself and against ours
-// without crashing; bad input fails with a message.
+// without crashing; bad input fails with a message; the broad benchmark's table
+// (tools/bench/quality_table.py) counts each miss of lanemap-eval's JSON once, by its kind.
 #include "core/eval/evaluate.h"
 #include "core/io/lanelet2.h"
 #include "core/osm/osm_data.h"
@@ -15,6 +16,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <fstream>
 
 namespace {
@@ -79,6 +81,72 @@ TEST(EvalTool, JsonKeysAndValuesOnAMissingLane) {
   }
   EXPECT_EQ(built_detected, 4);
   EXPECT_NE(out.find("recall 0.800"), std::string::npos) << out;
+}
+
+// tools/bench/quality_table.py (the broad benchmark's table) over lanemap-eval's JSON of three
+// "drives" of one network: where the misses are. Drive 1 lacks lane B1 (a truth lane no built lane
+// matched; the pair A1 -> B1 missed for want of it); drive 2 connects A1 to C0 instead of B1 (all
+// lanes detected: a truth pair missed and a built pair wrong between detected lanes); drive 3
+// has its lane A1 2 m off (whatever lanemap-eval says of it, the table's counts add up to its
+// totals).
+TEST(EvalTool, TheBenchmarkTableSaysWhereTheMissesAre) {
+  TempDir dir("quality-table");
+  const auto truth = located(lanemap::testing::network({}));
+  const std::vector<lanemap::map::LaneMap> built = {
+      located(lanemap::testing::network(lanemap::testing::with([](lanemap::testing::Net& n) { n.drop_b1 = true; }))),
+      located(lanemap::testing::network(lanemap::testing::with([](lanemap::testing::Net& n) { n.wrong_connection = true; }))),
+      located(lanemap::testing::network(lanemap::testing::with([](lanemap::testing::Net& n) { n.a1_shift = 2.0; })))};
+  lanemap::io::writeLanelet2(truth, dir.str("gt.osm"));
+  std::vector<nlohmann::json> evals;
+  for (size_t k = 0; k < built.size(); ++k) {
+    const std::string drive = dir.str("net-s" + std::to_string(k + 1));
+    std::filesystem::create_directories(drive + "/drive");
+    lanemap::io::writeLanelet2(built[k], drive + "/built.osm");
+    evals.push_back(runEval(dir.str("gt.osm"), drive + "/built.osm", drive + "/eval-test.json"));
+    ASSERT_FALSE(evals.back().is_null());
+  }
+  const auto r = runCommand("python3 " + dataPath("../tools/bench/quality_table.py") + " " + dir.str("") + " test");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir.str("quality.json"));
+  ASSERT_TRUE(in.good()) << r.output;
+  const auto q = nlohmann::json::parse(in)["test"]["pooled"];
+  const auto& m = q["misses"];
+  // Every miss is counted once, in one of its two kinds.
+  size_t truth_lanes = 0, detected = 0, built_lanes = 0, truth_pairs = 0, built_pairs = 0, correct = 0;
+  for (const auto& e : evals) {
+    truth_lanes += e["lanes"]["truth"].get<size_t>();
+    detected += e["lanes"]["detected"].get<size_t>();
+    built_lanes += e["lanes"]["built"].get<size_t>();
+    truth_pairs += e["intersections"]["truth_pairs"].get<size_t>();
+    built_pairs += e["intersections"]["built_pairs"].get<size_t>();
+    correct += e["intersections"]["correct_pairs"].get<size_t>();
+  }
+  EXPECT_EQ(m["lanes_unmatched"].get<size_t>() + m["lanes_not_detected"].get<size_t>(), truth_lanes - detected);
+  EXPECT_EQ(m["built_false"].get<size_t>(), built_lanes - detected);
+  EXPECT_EQ(m["pairs_missed_lane"].get<size_t>() + m["pairs_missed_both_detected"].get<size_t>(), truth_pairs - correct);
+  EXPECT_EQ(m["pairs_wrong_lane"].get<size_t>() + m["pairs_wrong_both_detected"].get<size_t>(), built_pairs - correct);
+  // Drives 1 and 2 alone, as reasoned above.
+  const auto one = [&](size_t k) {
+    std::filesystem::rename(dir.str("net-s" + std::to_string(k) + "/eval-test.json"), dir.str("net-s" + std::to_string(k) + "/eval-one.json"));
+    const auto rr = runCommand("python3 " + dataPath("../tools/bench/quality_table.py") + " " + dir.str("") + " one");
+    EXPECT_EQ(rr.exit_code, 0) << rr.output;
+    std::filesystem::rename(dir.str("net-s" + std::to_string(k) + "/eval-one.json"), dir.str("net-s" + std::to_string(k) + "/eval-test.json"));
+    std::ifstream f(dir.str("quality.json"));
+    return nlohmann::json::parse(f)["one"]["pooled"]["misses"];
+  };
+  const auto m1 = one(1);
+  EXPECT_EQ(m1["lanes_unmatched"].get<int>(), 1);  // B1
+  EXPECT_EQ(m1["lanes_not_detected"].get<int>(), 0);
+  EXPECT_EQ(m1["built_false"].get<int>(), 0);
+  EXPECT_EQ(m1["pairs_missed_lane"].get<int>(), 1);  // A1 -> B1
+  EXPECT_EQ(m1["pairs_missed_both_detected"].get<int>(), 0);
+  EXPECT_EQ(m1["pairs_wrong_lane"].get<int>() + m1["pairs_wrong_both_detected"].get<int>(), 0);
+  const auto m2 = one(2);
+  EXPECT_EQ(m2["lanes_unmatched"].get<int>() + m2["lanes_not_detected"].get<int>(), 0);
+  EXPECT_EQ(m2["pairs_missed_both_detected"].get<int>(), 1);  // A1 -> B1
+  EXPECT_EQ(m2["pairs_wrong_both_detected"].get<int>(), 1);   // A1 -> C0
+  EXPECT_EQ(m2["pairs_missed_lane"].get<int>() + m2["pairs_wrong_lane"].get<int>(), 0);
+  EXPECT_NE(r.output.find("misses: truth lanes"), std::string::npos) << r.output;
 }
 
 TEST(EvalTool, OriginOfOurFilesIsTheWritersOrigin) {

@@ -8,6 +8,13 @@ all drives, connection RMS over the correct pairs (each drive's mean weighted by
 A drive whose mapping failed outright is scored as an empty map: every driven truth lane and
 pair missed.
 
+Below each table, where the misses are (pooled): the truth lanes not detected, split into those no
+built lane matched and those matched by a lane too far off or too short to be a detection (and how
+many of either lie on roads under 10 m long); the built lanes that detect nothing; the truth pairs
+missed and the built pairs wrong, split by whether both of their lanes were detected (a pair into
+a lane not found cannot be right: lane recall bounds junction recall). quality.json has the same
+per network under "misses".
+
 With --trained-on a,b,c (the networks whose frames the segmentation model was trained on;
 quality.sh passes TRAINED_ON) two more pooled rows for the model's labels split the networks by
 whether the model saw them. (The shipped model's Monaco frames came from seeds 1-40, the
@@ -45,6 +52,46 @@ def counts(j):
         "crms_sum": (num(inter["rms_m"]) or 0.0) * inter["correct_pairs"] if num(inter["rms_m"]) is not None else 0.0,
         "crms_n": inter["correct_pairs"] if num(inter["rms_m"]) is not None else 0,
     }
+
+
+def misses(j):
+    """Counts of what lanemap-eval's --json detail says was missed or wrong (see the docstring)."""
+    m = {"lanes_unmatched": 0, "lanes_not_detected": 0, "lanes_missed_short": 0, "built_false": 0,
+         "built_false_matched": 0, "pairs_missed_lane": 0, "pairs_missed_both_detected": 0,
+         "pairs_wrong_lane": 0, "pairs_wrong_both_detected": 0}
+    detected = {"truth": {}, "built": {}}
+    for side, key in (("truth", "lanes_detail"), ("built", "built_lanes_detail")):
+        for lane in j.get(key, []):
+            for ll in lane.get("lanelets", []):
+                detected[side][ll] = bool(lane.get("detected"))
+            if lane.get("detected"):
+                continue
+            if side == "truth":
+                m["lanes_unmatched" if not lane.get("built_lanelets") else "lanes_not_detected"] += 1
+                m["lanes_missed_short"] += int(lane.get("length_m", 0.0) < 10.0)
+            else:
+                m["built_false"] += 1
+                m["built_false_matched"] += int(bool(lane.get("truth_lanelets")))
+    inter = j.get("intersections", {})
+    for side, key, prefix in (("truth", "truth_pair_detail", "pairs_missed"), ("built", "built_pair_detail", "pairs_wrong")):
+        for p in inter.get(key, []):
+            if p.get("correct"):
+                continue
+            both = all(detected[side].get(p.get(end, {}).get("lanelet"), False) for end in ("in", "out"))
+            m[prefix + ("_both_detected" if both else "_lane")] += 1
+    return m
+
+
+def misses_line(m):
+    lanes = m.get("lanes_unmatched", 0) + m.get("lanes_not_detected", 0)
+    pairs = m.get("pairs_missed_lane", 0) + m.get("pairs_missed_both_detected", 0)
+    wrong = m.get("pairs_wrong_lane", 0) + m.get("pairs_wrong_both_detected", 0)
+    return (f"   misses: truth lanes {lanes} ({m.get('lanes_unmatched', 0)} no built lane, "
+            f"{m.get('lanes_not_detected', 0)} matched but not detected; {m.get('lanes_missed_short', 0)} on roads "
+            f"under 10 m); built lanes detecting nothing {m.get('built_false', 0)} "
+            f"({m.get('built_false_matched', 0)} matched a truth lane); truth pairs {pairs} "
+            f"({m.get('pairs_missed_lane', 0)} with a lane not detected); wrong pairs {wrong} "
+            f"({m.get('pairs_wrong_both_detected', 0)} between detected lanes)")
 
 
 def add(a, b):
@@ -85,18 +132,21 @@ def main():
     drives = sorted(d for d in os.listdir(out) if os.path.isdir(os.path.join(out, d, "drive")))
     result = {}
     for lab in labels:
-        per_net, total = {}, {}
+        per_net, total, per_net_misses, total_misses = {}, {}, {}, {}
         for d in drives:
             net = d.rsplit("-s", 1)[0]
             p = os.path.join(out, d, f"eval-{lab}.json")
             if not os.path.exists(p):
                 continue
-            c = counts(load(p))
+            j = load(p)
+            c = counts(j)
             c["failed"] = int(os.path.exists(os.path.join(out, d, f"map-{lab}", "FAILED")))
             per_net[net] = add(per_net.get(net, {}), c)
             total = add(total, c)
-        result[lab] = {"networks": {n: {**figures(c), "counts": c} for n, c in per_net.items()},
-                       "pooled": {**figures(total), "counts": total}}
+            per_net_misses[net] = add(per_net_misses.get(net, {}), misses(j))
+            total_misses = add(total_misses, misses(j))
+        result[lab] = {"networks": {n: {**figures(c), "counts": c, "misses": per_net_misses[n]} for n, c in per_net.items()},
+                       "pooled": {**figures(total), "counts": total, "misses": total_misses}}
         print(f"\n== labels: {lab} (lanemap-eval --driven; {total.get('drives', 0)} drives, "
               f"{total.get('failed', 0)} whose mapping failed outright)")
         head = f"   {'network':28s} {'drives':>6s} {'lane P':>6s} {'lane R':>6s} {'RMS m':>6s} {'mIoU':>6s} " \
@@ -125,6 +175,7 @@ def main():
         beat = [n for n, c in per_net.items()
                 if all(figures(c)[k] > PAPER[k] for k in ("lane_p", "lane_r", "junc_p", "junc_r"))]
         print(f"   networks that beat the paper on lane P/R and junction P/R: {len(beat)} of {len(per_net)}")
+        print(misses_line(total_misses))
     clean = lambda v: {k: clean(x) for k, x in v.items()} if isinstance(v, dict) else (
         None if isinstance(v, float) and math.isnan(v) else v)
     with open(os.path.join(out, "quality.json"), "w") as f:

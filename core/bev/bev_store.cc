@@ -127,15 +127,16 @@ std::map<int64_t, PartialRoadInfo> partialRoads(const std::string& store) {
   return out;
 }
 
-StoredRoad storeRoad(const std::string& store, const RoadBev& road, bool align) {
+StoredRoad storeRoad(const std::string& store, const RoadBev& road, bool align, const Eigen::Vector2i& correction) {
   StoredRoad s;
   s.path = roadGridPath(store, road.road_id);
   io::createDirectories(std::filesystem::path(s.path).parent_path().string());
   const auto partial = partialRoad(store, road.road_id);  // before the road's grid changes
-  BevGrid grid = road.grid;
+  const BevGrid traversal = correction == Eigen::Vector2i::Zero() ? road.grid : shiftedGrid(road.grid, correction);
+  BevGrid grid = traversal;
   if (std::filesystem::exists(s.path)) {
     grid = BevGrid::load(s.path);
-    s.alignment = mergeAligned(road.grid, grid, align);
+    s.alignment = mergeAligned(traversal, grid, align);
     s.merged = true;
   }
   if (partial) {
@@ -153,18 +154,19 @@ StoredRoad storeRoad(const std::string& store, const RoadBev& road, bool align) 
 }
 
 StoredRoad storePartialRoad(const std::string& store, const RoadBev& road, double station_m, double road_length_m,
-                            bool align) {
-  if (std::filesystem::exists(roadGridPath(store, road.road_id))) return storeRoad(store, road, align);  // complete already
+                            bool align, const Eigen::Vector2i& correction) {
+  if (std::filesystem::exists(roadGridPath(store, road.road_id))) return storeRoad(store, road, align, correction);  // complete already
   StoredRoad s;
   s.path = partialGridPath(store, road.road_id);
   s.partial = true;
   s.station_m = station_m;
   s.road_length_m = road_length_m;
   io::createDirectories(partialDir(store).string());
-  BevGrid grid = road.grid;
+  const BevGrid traversal = correction == Eigen::Vector2i::Zero() ? road.grid : shiftedGrid(road.grid, correction);
+  BevGrid grid = traversal;
   if (const auto earlier = partialRoad(store, road.road_id)) {  // another drive ended on it too
     grid = BevGrid::load(earlier->path);
-    s.alignment = mergeAligned(road.grid, grid, align);
+    s.alignment = mergeAligned(traversal, grid, align);
     s.merged = true;
     s.station_m = std::max(s.station_m, earlier->station_m);
   }

@@ -72,16 +72,18 @@ std::map<int64_t, std::string> roadFiles(const std::string& dir, const std::stri
 // already stored gets the new traversal aligned to it first (bev::mergeAligned: both onto the
 // frame-weighted mean), unless `align` is false.
 // A partial of the road (storePartialRoad) is merged in as well (aligned when `align`) and
-// removed: the road is complete now.
-StoredRoad storeRoad(const std::string& store, const RoadBev& road, bool align = true);
+// removed: the road is complete now. `correction` (cells) moves the traversal first (this drive's
+// offset onto the store's drives, bev::LiveDriveOffset).
+StoredRoad storeRoad(const std::string& store, const RoadBev& road, bool align = true,
+                     const Eigen::Vector2i& correction = Eigen::Vector2i::Zero());
 
 std::string partialGridPath(const std::string& store, int64_t road_id);
 // Stores the road a drive ended on, driven to station_m (arc length along the road) of
 // road_length_m: into its partial grid (merged, aligned, into one already there; the station is the
 // further one). A road already complete in the store gets the traversal merged into its grid as
-// storeRoad does (the result is not partial). Throws like storeRoad.
+// storeRoad does (the result is not partial). `correction` as for storeRoad. Throws like storeRoad.
 StoredRoad storePartialRoad(const std::string& store, const RoadBev& road, double station_m, double road_length_m,
-                            bool align = true);
+                            bool align = true, const Eigen::Vector2i& correction = Eigen::Vector2i::Zero());
 // The road's partial (nullopt: none, or one already merged into the road's grid by a storeRoad a
 // crash cut short, which is removed now). A grid without its JSON (a crash between the two) is no
 // partial: its station is unknown.

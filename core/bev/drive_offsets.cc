@@ -78,4 +78,21 @@ DriveOffsets DriveOffsetSolver::solve() const {
   return out;
 }
 
+void LiveDriveOffset::addMerge(const Eigen::Vector2i& applied, const Alignment& a, int frames) {
+  if (!options_.enabled || !a.ok) return;
+  measured_.emplace_back((applied + a.shift_cells).cast<double>(), std::max(1, frames));
+  if (static_cast<int>(measured_.size()) < options_.min_roads) return;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  double total = 0.0;
+  for (const auto& [c, w] : measured_) {
+    mean += w * c;
+    total += w;
+  }
+  mean /= total;
+  consistent_ = true;
+  for (const auto& [c, w] : measured_) consistent_ = consistent_ && (c - mean).norm() * resolution_m_ <= options_.max_spread_m;
+  correction_ = consistent_ ? Eigen::Vector2i(static_cast<int>(std::lround(mean.x())), static_cast<int>(std::lround(mean.y())))
+                            : Eigen::Vector2i::Zero();
+}
+
 }  // namespace lanemap::bev

@@ -51,4 +51,39 @@ class DriveOffsetSolver {
   std::vector<Pair> pairs_;
 };
 
+// The same offset learned while a drive goes on (the live BEV builder storing into a map store other
+// drives filled): every road of this drive merged onto stored evidence with a trusted alignment
+// measures the drive's correction (the shift already applied to its grid plus the alignment's
+// residual). Once min_roads of them agree (each within max_spread_m of their frame-weighted mean),
+// that mean, in whole cells, is the correction applied to the drive's later roads before they are
+// stored: a road this drive alone saw lands where the store's drives put the world, instead of off
+// by this drive's GNSS/INS offset. Until then, or while the measurements disagree (a wrong
+// alignment), the correction is zero. Only the roads stored after the estimate holds are moved.
+struct DriveOffsetOptions {
+  bool enabled = true;
+  int min_roads = 2;            // trusted alignments needed before any correction
+  double max_spread_m = 0.3;    // each measurement within this of the mean, else none is applied
+};
+
+class LiveDriveOffset {
+ public:
+  explicit LiveDriveOffset(DriveOffsetOptions options = {}, double resolution_m = 0.1)
+      : options_(options), resolution_m_(resolution_m) {}
+  // The correction (cells) to apply to the next road's grid before storing it.
+  Eigen::Vector2i correction() const { return correction_; }
+  // A road stored with `applied` cells of correction and merged onto stored evidence with alignment
+  // `a` (its traversal's `frames` weigh it). An untrusted alignment (or a first traversal) is no
+  // measurement.
+  void addMerge(const Eigen::Vector2i& applied, const Alignment& a, int frames);
+  int measurements() const { return static_cast<int>(measured_.size()); }
+  bool consistent() const { return consistent_; }
+
+ private:
+  DriveOffsetOptions options_;
+  double resolution_m_;
+  std::vector<std::pair<Eigen::Vector2d, double>> measured_;  // correction (cells), weight
+  Eigen::Vector2i correction_ = Eigen::Vector2i::Zero();
+  bool consistent_ = true;
+};
+
 }  // namespace lanemap::bev

@@ -10,7 +10,10 @@
 // player ended, or a shutdown): the road being driven never closed, so it is stored partial
 // (bev_store.h storePartialRoad: bev/partial/road_<id>.bev, with the station the last pose reached)
 // and announced on BEV_ROAD with that path; its checkpoint is removed (a crash, SIGKILL, skips this
-// and leaves the checkpoint for the next start). STATUS roads_partial. A thin wrapper over core/bev/bev_builder.h; the mesh
+// and leaves the checkpoint for the next start). STATUS roads_partial. A store other drives filled:
+// the roads this drive merges onto stored evidence measure its offset (bev::LiveDriveOffset, config
+// `drive_offset`), and once min_roads agree the later roads are stored moved by it (STATUS
+// drive_offset_cm, roads_corrected). A thin wrapper over core/bev/bev_builder.h; the mesh
 // of each LIDAR sweep is built in core's worker thread so LCM handling never waits for it, a frame
 // projection runs inline (tools/bench/bev_bench.cc: ~10-20 ms). Counters in STATUS.
 //
@@ -27,6 +30,7 @@
 #pragma once
 
 #include "core/bev/bev_builder.h"
+#include "core/bev/drive_offsets.h"
 #include "core/bev/bev_render.h"
 #include "core/bev/bev_store.h"
 #include "core/bev/checkpoint_writer.h"
@@ -78,6 +82,9 @@ class BevBuilderApp {
     preview_max_px_ = max_px;
   }
   void setCheckpointPeriod(double period_s) { checkpoint_period_s_ = period_s; }
+  void setDriveOffset(const bev::DriveOffsetOptions& options, double resolution_m) {
+    drive_offset_ = bev::LiveDriveOffset(options, resolution_m);
+  }
   // The road frame a partial road's station is measured in (the map block's road_frame: the lane
   // mapper explores up to the station in the same frame).
   void setRoadFrame(const lanes::ExplorerOptions& frame) { road_frame_ = frame; }
@@ -282,13 +289,18 @@ class BevBuilderApp {
     for (auto& road : builder_.takeClosed()) {
       try {
         checkpoints_.cancel(road.road_id);  // no older checkpoint may land after the road is stored
-        const auto stored = bev::storeRoad(store_, road);
+        const Eigen::Vector2i correction = drive_offset_.correction();
+        const auto stored = bev::storeRoad(store_, road, true, correction);
         publish(road, stored);
         bev::removeCheckpoint(store_, road.road_id);  // after the road is stored: a crash between keeps both
         checkpointed_.erase(road.road_id);
         process_.counters().add("roads_written");
+        if (correction != Eigen::Vector2i::Zero()) process_.counters().add("roads_corrected");
         if (stored.merged) {  // driven before: merged onto the stored evidence, aligned when it could be
           process_.counters().add(stored.alignment.ok ? "roads_merged_aligned" : "roads_merged_unaligned");
+          drive_offset_.addMerge(correction, stored.alignment, road.grid.frames());
+          process_.counters().set("drive_offset_cm", std::lround(drive_offset_.correction().cast<double>().norm() *
+                                                                 road.grid.resolution() * 100.0));
           const auto cm = static_cast<int64_t>(std::lround(stored.alignment.shift_m.norm() * 100));
           if (stored.alignment.ok) process_.counters().set("align_shift_cm_max", std::max(process_.counters().get("align_shift_cm_max"), cm));
           std::cerr << "bev_builder: road " << road.road_id << " merged onto its stored BEV, "
@@ -314,7 +326,7 @@ class BevBuilderApp {
       checkpoints_.cancel(open->road_id);
       const lanes::ExplorerOptions& frame = road_frame_;  // the station in the explorer's frame of the road
       const auto stored = bev::storePartialRoad(store_, *open, mapping::roadStation(*road, *last_position_, frame),
-                                                mapping::roadFrameLength(*road, frame));
+                                                mapping::roadFrameLength(*road, frame), true, drive_offset_.correction());
       open->closed_utime = last_projected_utime_;
       publish(*open, stored);
       bev::removeCheckpoint(store_, open->road_id);
@@ -399,6 +411,7 @@ class BevBuilderApp {
   int64_t last_label_seq_ = -1, labels_received_ = 0;
   int64_t recovered_frame_utime_ = 0;     // newest frame of the recovered checkpoints, until a frame comes
   std::optional<Eigen::Vector2d> last_position_;  // the newest pose (ENU), where a partial road stops
+  bev::LiveDriveOffset drive_offset_;     // this drive's correction onto the store's drives (this run's)
   bev::CheckpointWriter checkpoints_;     // after store_ (it takes it); its thread ends first
 };
 

@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
     auto made = std::make_unique<BevBuilderApp>(process, std::move(sk), camera, options, store);
     made->setPreview(settings.preview_period_s, settings.preview_max_px);
     made->setCheckpointPeriod(settings.checkpoint_period_s);
+    made->setDriveOffset(settings.drive_offset, options.accumulator.grid.resolution_m);
     made->setRoadFrame(withRoadFrame(lanes::ExplorerOptions{}, settings.map.road_frame));
     made->recover();
     app = std::move(made);

@@ -13,6 +13,7 @@
 #pragma once
 
 #include "core/bev/bev_builder.h"
+#include "core/bev/drive_offsets.h"
 #include "core/config/map_config.h"
 #include "core/config/yaml_reader.h"
 #include "core/intersections/intersections.h"
@@ -62,6 +63,7 @@ struct BevBuilderSettings {
   double preview_period_s = 1.0;     // preview.period_s: BEV_OPEN pictures (0: none)
   int preview_max_px = 512;          // preview.max_px (>= 16)
   double checkpoint_period_s = 1.0;  // checkpoint.period_s: the open road to <store>/bev/open/ (0: none)
+  bev::DriveOffsetOptions drive_offset;  // drive_offset: this drive's offset learned on stored roads
   bev::BevBuilderOptions options;
   static BevBuilderSettings fromYaml(const config::YamlReader& r);
   static BevBuilderSettings fromYamlFile(const std::string& path);

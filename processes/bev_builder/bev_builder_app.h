@@ -30,10 +30,10 @@
 #pragma once
 
 #include "core/bev/bev_builder.h"
-#include "core/bev/drive_offsets.h"
 #include "core/bev/bev_render.h"
 #include "core/bev/bev_store.h"
 #include "core/bev/checkpoint_writer.h"
+#include "core/bev/drive_offsets.h"
 #include "core/camera/camera_model.h"
 #include "core/config/vehicle_config.h"
 #include "core/io/store_lock.h"

@@ -116,8 +116,8 @@ TEST(Recording, LoggerRecordsAReplayedDriveByteForByteAndItReplaysAgain) {
   // messages that travel in one datagram, nor within one channel. LCM stamps a fragmented message
   // (camera, LIDAR) when its first fragment arrives, so small messages received while its
   // fragments trickle in are written before it with later stamps: by 36 us on an idle machine, by
-  // 39 ms in CI with the multi-host test running beside this one. Messages under 1400 bytes are
-  // sent in one datagram by every LCM version (newer ones only fragment above 64 kB).
+  // 39 ms in CI with the multi-host test running beside this one. A message under 1400 bytes (POSE,
+  // ROAD_EVENT, ...) is one datagram: no LCM version fragments below that.
   std::size_t small_messages = 0;
   int64_t last_small = 0;
   std::map<std::string, int64_t> last_in_channel;

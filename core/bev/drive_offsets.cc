@@ -78,6 +78,11 @@ DriveOffsets DriveOffsetSolver::solve() const {
   return out;
 }
 
+void LiveDriveOffset::addStored(int64_t road_id, bool merged, const Eigen::Vector2i& applied, const Alignment& a, int frames) {
+  const bool own = !stored_.insert(road_id).second;
+  if (merged && !own) addMerge(applied, a, frames);
+}
+
 void LiveDriveOffset::addMerge(const Eigen::Vector2i& applied, const Alignment& a, int frames) {
   if (!options_.enabled || !a.ok) return;
   measured_.emplace_back((applied + a.shift_cells).cast<double>(), std::max(1, frames));

@@ -18,6 +18,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -75,6 +76,9 @@ class LiveDriveOffset {
   // `a` (its traversal's `frames` weigh it). An untrusted alignment (or a first traversal) is no
   // measurement.
   void addMerge(const Eigen::Vector2i& applied, const Alignment& a, int frames);
+  // Every road this drive stores, merged or not: a merge onto a road this drive stored before is
+  // onto its own evidence and measures nothing; any other merge is addMerge.
+  void addStored(int64_t road_id, bool merged, const Eigen::Vector2i& applied, const Alignment& a, int frames);
   int measurements() const { return static_cast<int>(measured_.size()); }
   bool consistent() const { return consistent_; }
 
@@ -82,6 +86,7 @@ class LiveDriveOffset {
   DriveOffsetOptions options_;
   double resolution_m_;
   std::vector<std::pair<Eigen::Vector2d, double>> measured_;  // correction (cells), weight
+  std::set<int64_t> stored_;                                   // roads this drive stored
   Eigen::Vector2i correction_ = Eigen::Vector2i::Zero();
   bool consistent_ = true;
 };

@@ -297,11 +297,9 @@ class BevBuilderApp {
         checkpointed_.erase(road.road_id);
         process_.counters().add("roads_written");
         if (correction != Eigen::Vector2i::Zero()) process_.counters().add("roads_corrected");
-        const bool again = !stored_this_run_.insert(road.road_id).second;
+        drive_offset_.addStored(road.road_id, stored.merged, correction, stored.alignment, road.grid.frames());
         if (stored.merged) {  // driven before: merged onto the stored evidence, aligned when it could be
           process_.counters().add(stored.alignment.ok ? "roads_merged_aligned" : "roads_merged_unaligned");
-          // A road this run stored before holds this drive's own evidence: no measure of its offset.
-          if (!again) drive_offset_.addMerge(correction, stored.alignment, road.grid.frames());
           process_.counters().set("drive_offset_cm", std::lround(drive_offset_.correction().cast<double>().norm() *
                                                                  road.grid.resolution() * 100.0));
           const auto cm = static_cast<int64_t>(std::lround(stored.alignment.shift_m.norm() * 100));
@@ -415,7 +413,6 @@ class BevBuilderApp {
   int64_t recovered_frame_utime_ = 0;     // newest frame of the recovered checkpoints, until a frame comes
   std::optional<Eigen::Vector2d> last_position_;  // the newest pose (ENU), where a partial road stops
   bev::LiveDriveOffset drive_offset_;     // this drive's correction onto the store's drives (this run's)
-  std::set<int64_t> stored_this_run_;     // roads this run stored (a merge onto one measures no offset)
   bev::CheckpointWriter checkpoints_;     // after store_ (it takes it); its thread ends first
 };
 

@@ -103,6 +103,14 @@ TEST(StoreAlign, MeasurementsThatDisagreeOrAreNotTrustedMoveNothing) {
   offset.addMerge({-2, 2}, a, 30);
   EXPECT_EQ(offset.correction(), Eigen::Vector2i(-3, 4));
   EXPECT_TRUE(offset.consistent());
+  // The drive drives a road it stored itself again: merged onto its own evidence, no measurement
+  // (counted, the (0, 0) it measures would make the three disagree).
+  offset.addStored(42, false, {-3, 4}, Alignment(), 30);
+  Alignment self = a;
+  self.shift_cells = {3, -4};  // the road was stored before the correction: it is off by it
+  offset.addStored(42, true, {-3, 4}, self, 30);
+  EXPECT_EQ(offset.measurements(), 2);
+  EXPECT_EQ(offset.correction(), Eigen::Vector2i(-3, 4));
   a.shift_cells = {12, -10};  // a wrong alignment 2 m away: the three disagree, nothing is applied
   offset.addMerge({0, 0}, a, 30);
   EXPECT_FALSE(offset.consistent());

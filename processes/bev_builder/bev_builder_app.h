@@ -59,7 +59,6 @@
 #include <map>
 #include <memory>
 #include <optional>
-#include <set>
 #include <string>
 
 namespace lanemap::bev_builder_app {

@@ -78,11 +78,11 @@ BevBuilderSettings BevBuilderSettings::fromYaml(const config::YamlReader& r) {
   if (preview.read("max_px", s.preview_max_px) && s.preview_max_px < 16) preview.fail("max_px", "must be >= 16");
   const auto checkpoint = r.section("checkpoint");
   if (checkpoint.read("period_s", s.checkpoint_period_s) && !(s.checkpoint_period_s >= 0)) checkpoint.fail("period_s", "must be >= 0");
-  if (r.has("drive_offset")) {
-    const auto d = r.section("drive_offset");
-    d.read("enabled", s.drive_offset.enabled);
-    if (d.read("min_roads", s.drive_offset.min_roads) && s.drive_offset.min_roads < 1) d.fail("min_roads", "must be >= 1");
-    if (d.read("max_spread_m", s.drive_offset.max_spread_m) && !(s.drive_offset.max_spread_m > 0)) d.fail("max_spread_m", "must be > 0");
+  const auto drive_offset = r.section("drive_offset");
+  drive_offset.read("enabled", s.drive_offset.enabled);
+  if (drive_offset.read("min_roads", s.drive_offset.min_roads) && s.drive_offset.min_roads < 1) drive_offset.fail("min_roads", "must be >= 1");
+  if (drive_offset.read("max_spread_m", s.drive_offset.max_spread_m) && !(s.drive_offset.max_spread_m > 0)) {
+    drive_offset.fail("max_spread_m", "must be > 0");
   }
   s.options = bev::BevBuilderOptions::fromYaml(r);
   return s;

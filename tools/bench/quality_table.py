@@ -143,8 +143,9 @@ def main():
             c["failed"] = int(os.path.exists(os.path.join(out, d, f"map-{lab}", "FAILED")))
             per_net[net] = add(per_net.get(net, {}), c)
             total = add(total, c)
-            per_net_misses[net] = add(per_net_misses.get(net, {}), misses(j))
-            total_misses = add(total_misses, misses(j))
+            m = misses(j)
+            per_net_misses[net] = add(per_net_misses.get(net, {}), m)
+            total_misses = add(total_misses, m)
         result[lab] = {"networks": {n: {**figures(c), "counts": c, "misses": per_net_misses[n]} for n, c in per_net.items()},
                        "pooled": {**figures(total), "counts": total, "misses": total_misses}}
         print(f"\n== labels: {lab} (lanemap-eval --driven; {total.get('drives', 0)} drives, "

@@ -29,6 +29,7 @@
 // (SBATCH_PARTITION, SBATCH_ACCOUNT). --slurm-dry-run writes them without submitting.
 #include "processes/framework/share_dir.h"
 #include "processes/framework/spawn_logged.h"
+#include "tools/cli_checks.h"
 
 #include <CLI/CLI.hpp>
 #include <fcntl.h>
@@ -169,7 +170,7 @@ int main(int argc, char** argv) {
   app.add_option("--store", o.store, "the map store (a folder, created): projections/, map/ (map.osm, map.geojson, ...)")->required();
   app.add_option("--osm", o.osm, "road-level OSM file of the city (.osm or .osm.pbf)")->required()->check(CLI::ExistingFile);
   app.add_option("drives", o.drives, "drive logs (drive.lcmlog, or a folder holding one), added to the store in this order");
-  app.add_option("-j,--jobs", o.jobs, "drives projected at once (default: every core)")->check(CLI::NonNegativeNumber);
+  app.add_option("-j,--jobs", o.jobs, "drives projected at once (default: every core)")->check(lanemap::cli::kNonNegative);
   auto* oracle = app.add_flag("--oracle", o.oracle, "map on the simulator's truth labels (as lanemap-offline)");
   app.add_option("--semantic-channel", o.semantic_channel, "map on the labels of this channel of the logs")->excludes(oracle);
   app.add_option("--model", o.model, "ONNX model, instead of config/segmenter.yaml's");

@@ -14,6 +14,7 @@
 #include "core/mapping/coverage.h"
 #include "core/osm/osm_data.h"
 #include "processes/framework/share_dir.h"
+#include "tools/cli_checks.h"
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Geometry>
@@ -128,10 +129,11 @@ int main(int argc, char** argv) {
   app.add_option("--geojson", geojson_path, "write the roads with their coverage as GeoJSON (WGS84)");
   app.add_option("--png", png_path, "draw the roads coloured by coverage");
   app.add_flag("--list", list, "print one line per directed road");
-  app.add_option("--plan", plan_s, "plan a route of this many seconds of driving that covers the most unmapped length");
-  app.add_option("--from", from, "--plan: the intersection (OSM node id) the drive starts at");
-  app.add_option("--speed", speed, "--plan: mean driving speed, m/s")->capture_default_str();
-  app.add_option("--gpx", gpx_path, "--plan: write the route as a GPX track");
+  auto* plan_opt = app.add_option("--plan", plan_s, "plan a route of this many seconds of driving that covers the most unmapped length")
+                       ->check(lanemap::cli::kPositive);
+  app.add_option("--from", from, "--plan: the intersection (OSM node id) the drive starts at")->needs(plan_opt);
+  app.add_option("--speed", speed, "--plan: mean driving speed, m/s")->capture_default_str()->check(lanemap::cli::kPositive)->needs(plan_opt);
+  app.add_option("--gpx", gpx_path, "--plan: write the route as a GPX track")->needs(plan_opt);
   CLI11_PARSE(app, argc, argv);
   try {
     if (plan_s > 0.0 && from < 0) throw std::runtime_error("--plan needs --from INTERSECTION (an OSM node id of lanemap-skeleton's)");

@@ -17,6 +17,7 @@
 #include "processes/framework/process.h"
 #include "processes/framework/process_configs.h"
 #include "processes/framework/share_dir.h"
+#include "tools/cli_checks.h"
 
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -39,7 +40,7 @@ int main(int argc, char** argv) {
   app.add_option("--station", station,
                  "explore the road as far as a drive that ended on it got: the station (m along the road) of its "
                  "summary.json \"partial\" entry; the grid is then DIR/bev/partial/road_<id>.bev")
-      ->check(CLI::NonNegativeNumber);
+      ->check(lanemap::cli::kNonNegative);
   app.add_option("--history", history_path, "write the surviving particles (s, d) of every 5th step as CSV");
   app.add_option("--raster", raster_path,
                  "write the straightened raster (rows along s upwards, d to the left; one pixel per cell) as PNG: "

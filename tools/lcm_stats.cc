@@ -3,6 +3,7 @@
 // A text-mode lcm-spy for scripts and tests.
 #include "processes/framework/channels.h"
 #include "processes/framework/process.h"
+#include "tools/cli_checks.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -45,7 +46,7 @@ int main(int argc, char** argv) {
   double seconds = 10.0, idle_exit = 0.0;
   app.add_option("--lcm-url", url, "LCM URL to listen on (default $LCM_DEFAULT_URL)");
   app.add_option("--log", log_path, "read this LCM log file instead of listening");
-  app.add_option("--seconds", seconds, "listen this long")->check(CLI::PositiveNumber);
+  app.add_option("--seconds", seconds, "listen this long")->check(lanemap::cli::kPositive);
   app.add_option("--idle-exit", idle_exit, "stop after this many seconds without a message, once one came");
   app.add_option("--json", json_path, "also write the figures as JSON");
   CLI11_PARSE(app, argc, argv);

@@ -12,6 +12,7 @@
 // timestamp never stalls the replay. Exit 0 when it played at least one event (a damaged log
 // too: the report goes to stderr), 2 when the file is not an LCM log or holds no whole event.
 #include "processes/framework/log_reader.h"
+#include "tools/cli_checks.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -28,11 +29,11 @@ int main(int argc, char** argv) {
   double speed = 1.0, max_gap_s = 5.0;
   bool quiet = false;
   app.add_option("log", path, "the LCM log file")->required();
-  app.add_option("-s,--speed", speed, "pace multiplier (2: twice as fast; 0: as fast as it can)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("-s,--speed", speed, "pace multiplier (2: twice as fast; 0: as fast as it can)")->capture_default_str()->check(lanemap::cli::kNonNegative);
   app.add_option("-l,--lcm-url", url, "LCM URL to publish on (default $LCM_DEFAULT_URL)");
   app.add_option("--max-gap", max_gap_s, "a jump between two timestamps larger than this (s of log time) is not waited for")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(lanemap::cli::kPositive);
   app.add_flag("-q,--quiet", quiet, "no summary at the end of an undamaged log");
   CLI11_PARSE(app, argc, argv);
 

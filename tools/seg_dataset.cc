@@ -5,6 +5,7 @@
 //   name,osm,seed,region,t_s,east_m,north_m,light,sun_elevation_deg,pitch_offset_deg
 #include "core/seg/sim_frames.h"
 #include "processes/framework/share_dir.h"
+#include "tools/cli_checks.h"
 
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -31,10 +32,10 @@ int main(int argc, char** argv) {
   app.add_option("--out", out_dir, "output folder (created; index.csv is appended to)")->required();
   app.add_option("--tag", tag, "name prefix of the frames (default: the OSM file's stem)");
   app.add_option("--first-seed", first_seed, "first seed");
-  app.add_option("--seeds", num_seeds, "number of seeds (one drive each)")->check(CLI::PositiveNumber);
-  app.add_option("--frames", o.max_frames, "frames per seed")->check(CLI::PositiveNumber);
-  app.add_option("--spacing", o.frame_spacing_s, "mean seconds between frames")->check(CLI::PositiveNumber);
-  app.add_option("--duration", o.duration_s, "drive length per seed, seconds")->check(CLI::PositiveNumber);
+  app.add_option("--seeds", num_seeds, "number of seeds (one drive each)")->check(lanemap::cli::kPositive);
+  app.add_option("--frames", o.max_frames, "frames per seed")->check(lanemap::cli::kPositive);
+  app.add_option("--spacing", o.frame_spacing_s, "mean seconds between frames")->check(lanemap::cli::kPositive);
+  app.add_option("--duration", o.duration_s, "drive length per seed, seconds")->check(lanemap::cli::kPositive);
   app.add_option("--region", region, "all, train or validation (east split)")
       ->check(CLI::IsMember({"all", "train", "validation"}));
   app.add_option("--validation-fraction", o.validation_fraction, "western share of the network held out");

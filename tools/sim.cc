@@ -31,6 +31,7 @@
 #include "processes/framework/process.h"
 #include "processes/framework/process_configs.h"
 #include "processes/framework/share_dir.h"
+#include "tools/cli_checks.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -217,7 +218,7 @@ int main(int argc, char** argv) {
                  "the world's own seed (lane widths, parked cars, paint wear, ...): drives of one campaign share it and "
                  "write the same groundtruth.osm; each such drive also gets its own constant pose offset "
                  "(sim_drive.yaml pose_noise campaign_offset_sigma_m, campaign_heading_sigma_deg)");
-  app.add_option("--duration", duration, "longest drive, seconds")->check(CLI::PositiveNumber);
+  app.add_option("--duration", duration, "longest drive, seconds")->check(lanemap::cli::kPositive);
   app.add_option("--camera-hz", camera_hz, "camera frame rate")->check(CLI::Range(0.1, 60.0));
   app.add_option("--pose-hz", pose_hz, "pose rate")->check(CLI::Range(0.1, 1000.0));
   app.add_flag("--no-lidar", no_lidar, "no LIDAR_PACKETS");

@@ -30,6 +30,8 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace lanemap::mapping {
 namespace {
@@ -372,6 +374,25 @@ TEST(Coverage, TheToolWritesTheFiguresAndNamesWhatItCouldNotRead) {
   const std::string sim = std::string(LANEMAP_BIN_DIR) + "/lanemap-sim -q --osm " + kOsm + " --out " + out + "/drive --seed 1" +
                           " --duration 2 --no-lidar --route " + route + " > " + out + "/sim.log 2>&1";
   EXPECT_EQ(std::system(sim.c_str()), 0) << route;
+}
+
+// A plan the tool cannot make is refused before anything is read, naming the option.
+TEST(Coverage, TheToolRefusesPlanOptionsItCannotUse) {
+  lanemap::testing::TempDir dir("coverage-cli");
+  const std::string tool = std::string(LANEMAP_BIN_DIR) + "/lanemap-coverage --store " + dir.str() + " --osm " + kOsm;
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {" --plan -5 --from 1", "--plan: must be greater than 0, not -5"},
+           {" --plan 0 --from 1", "--plan: must be greater than 0, not 0"},
+           {" --plan 60 --from 1 --speed 0", "--speed: must be greater than 0, not 0"},
+           {" --gpx " + dir.str("x.gpx"), "--gpx requires --plan"},
+           {" --from 1", "--from requires --plan"},
+           {" --plan 60", "--plan needs --from"}}) {
+    const auto run = lanemap::testing::runCommand(tool + args);
+    EXPECT_NE(run.exit_code, 0) << args;
+    EXPECT_NE(run.output.find(message), std::string::npos) << args << ": " << run.output;
+    EXPECT_EQ(run.output.find("directed roads"), std::string::npos) << args << ": went on to read the store: " << run.output;
+  }
+  EXPECT_FALSE(fs::exists(dir.str("x.gpx")));
 }
 
 }  // namespace

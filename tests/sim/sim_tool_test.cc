@@ -443,6 +443,16 @@ TEST(SimToolBadInput, ImpossibleRoute) {
   expectCleanFailure("--osm " + dataPath("osm/west-oakland.osm") + " --route abc", "route");
 }
 
+// A number out of its range is named with what it must be (CLI11's own check printed its upper
+// bound, DBL_MAX, as 309 digits).
+TEST(SimToolBadInput, ANumberOutOfRangeSaysWhatItMustBe) {
+  expectCleanFailure("--osm " + dataPath("osm/west-oakland.osm") + " --duration -1", "--duration: must be greater than 0, not -1");
+  expectCleanFailure("--osm " + dataPath("osm/west-oakland.osm") + " --duration 0", "--duration: must be greater than 0, not 0");
+  expectCleanFailure("--osm " + dataPath("osm/west-oakland.osm") + " --duration soon", "--duration: a number is needed, not 'soon'");
+  const auto r = runCommand(binPath("lanemap-sim") + " --osm " + dataPath("osm/west-oakland.osm") + " --out /nonexistent/x --duration -1");
+  EXPECT_LT(r.output.size(), 200u) << r.output;
+}
+
 TEST(SimToolBadInput, NonEmptyOutputFolderIsNotOverwritten) {
   TempDir dir("simbad-out");
   std::ofstream(dir.str("keep.txt")) << "mine";

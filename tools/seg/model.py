@@ -39,24 +39,36 @@ class Up2(nn.Module):
         return F.interpolate(x, scale_factor=2.0, mode="bilinear", align_corners=False)
 
 
+# Architectures by name (train.py --arch). "v3": the shipped lanesegnet-v3. "small" (issue 17: 25 ms
+# a frame on one core): narrower first encoder stages, a decoder half as wide and a 1x1 head, where
+# v3 spends most of its time (lanemap-bench-seg's per-module profile: the half-resolution decoder
+# stage and the 3x3 head are 46 % of v3's forward pass). Untrained, through the segmenter on one
+# thread in one run (2026-12-06): small 23.0 ms a frame, v3 43.3.
+ARCHS = {
+    "v3": dict(width=(16, 32, 64, 96), decoder=(64, 32, 24), head_kernel=3),
+    "small": dict(width=(12, 24, 48, 96), decoder=(32, 16, 12), head_kernel=1),
+}
+
+
 class LaneSegNet(nn.Module):
-    def __init__(self, num_classes=NUM_CLASSES, width=(16, 32, 64, 96), logits="full"):
+    def __init__(self, num_classes=NUM_CLASSES, width=(16, 32, 64, 96), logits="full", decoder=(64, 32, 24), head_kernel=3):
         super().__init__()
         if logits not in ("full", "half"):
             raise ValueError("logits must be 'full' or 'half'")
         self.logits = logits
         c1, c2, c3, c4 = width
+        d3, d2, d1 = decoder
         self.enc1 = ConvBNReLU(3, c1, 2)                                        # 1/2
         self.enc2 = nn.Sequential(ConvBNReLU(c1, c2, 2), ConvBNReLU(c2, c2))   # 1/4
         self.enc3 = nn.Sequential(ConvBNReLU(c2, c3, 2), ConvBNReLU(c3, c3))   # 1/8
         self.enc4 = nn.Sequential(ConvBNReLU(c3, c4, 2), ConvBNReLU(c4, c4, dilation=2),
                                   ConvBNReLU(c4, c4, dilation=4))              # 1/16
         self.up = Up2()
-        self.dec3 = ConvBNReLU(c4 + c3, c3)                                    # 1/8
-        self.dec2 = ConvBNReLU(c3 + c2, c2)                                    # 1/4
-        self.dec1 = ConvBNReLU(c2 + c1, 24)                                    # 1/2
+        self.dec3 = ConvBNReLU(c4 + c3, d3)                                    # 1/8
+        self.dec2 = ConvBNReLU(d3 + c2, d2)                                    # 1/4
+        self.dec1 = ConvBNReLU(d2 + c1, d1)                                    # 1/2
         shuffle = 4 if logits == "full" else 1                                  # 2 x 2 pixels per cell
-        self.head = nn.Conv2d(24, num_classes * shuffle, 3, padding=1)         # logits at 1/2
+        self.head = nn.Conv2d(d1, num_classes * shuffle, head_kernel, padding=head_kernel // 2)  # logits at 1/2
 
     def forward(self, x):
         e1 = self.enc1(x)
@@ -75,7 +87,7 @@ if __name__ == "__main__":
     import time
     torch.set_num_threads(int(sys.argv[1]) if len(sys.argv) > 1 else 2)
     h, w = (int(sys.argv[2]), int(sys.argv[3])) if len(sys.argv) > 3 else (176, 480)
-    net = LaneSegNet()
+    net = LaneSegNet(**ARCHS[sys.argv[4] if len(sys.argv) > 4 else "v3"])
     print("params", sum(p.numel() for p in net.parameters()))
     x = torch.randn(8, 3, h, w)
     y = torch.randint(0, NUM_CLASSES, (8, h, w))

@@ -31,7 +31,7 @@ import torch
 import torch.nn.functional as F
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from model import LaneSegNet, NUM_CLASSES  # noqa: E402
+from model import ARCHS, LaneSegNet, NUM_CLASSES  # noqa: E402
 
 CLASS_NAMES = ["background", "lane_ego", "lane_left", "lane_right", "lane_left_left", "lane_right_right",
                "dashed_line", "solid_line", "crosswalk", "curb", "stop_line"]
@@ -117,6 +117,7 @@ def main():
                     help="camera rows above the road not given to the model (segmenter: model.crop_top)")
     ap.add_argument("--logits", choices=["full", "half"], default="full",
                     help="full: logits at the input resolution (v2); half: at 1/2 (v1)")
+    ap.add_argument("--arch", choices=sorted(ARCHS), default="v3", help="network size (model.py ARCHS)")
     ap.add_argument("--dice", type=float, default=0.0, help="weight of the soft Dice loss added to cross-entropy")
     ap.add_argument("--steps", type=int, default=900)
     ap.add_argument("--batch", type=int, default=8)
@@ -149,7 +150,7 @@ def main():
     print("class weights  ", np.round(weights, 2).tolist(), flush=True)
     wt = torch.tensor(weights, dtype=torch.float32)
 
-    net = LaneSegNet(logits=args.logits)
+    net = LaneSegNet(logits=args.logits, **ARCHS[args.arch])
 
     def forward_full(x):
         out = net(x)

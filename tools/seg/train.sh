@@ -19,7 +19,8 @@
 # (RECIPE=monaco renders the four HELD_OUT networks for its per-network table; never trained on).
 # Frames are rendered once per WORK_DIR (a second run reuses them). Environment: WIDTH x HEIGHT
 # (model input, 480 x 176), CROP_TOP (camera rows above the road the model never sees, 120),
-# DICE (weight of the soft Dice loss, 0.5), STEPS (11900), MAX_MINUTES (240: a cap; the
+# ARCH (tools/seg/model.py ARCHS: v3, the shipped network, or small), DICE (weight of the soft
+# Dice loss, 0.5), STEPS (11900), MAX_MINUTES (240: a cap; the
 # learning-rate schedule anneals within whichever comes first), THREADS (2), OUT (models/lanesegnet.onnx).
 # A model trained at another input size or crop needs config/segmenter.yaml's model keys changed.
 set -euo pipefail
@@ -63,7 +64,7 @@ fi
 echo "train.sh: frames rendered in $(( $(date +%s) - t0 )) s into $work"
 out=${OUT:-$root/models/lanesegnet.onnx}
 /usr/bin/python3 "$here/train.py" --train "${train_dirs[@]}" --val "${val_dirs[@]}" --out "$out" \
-  --width "${WIDTH:-480}" --height "${HEIGHT:-176}" --crop-top "${CROP_TOP:-120}" --dice "${DICE:-0.5}" \
+  --arch "${ARCH:-v3}" --width "${WIDTH:-480}" --height "${HEIGHT:-176}" --crop-top "${CROP_TOP:-120}" --dice "${DICE:-0.5}" \
   --steps "${STEPS:-11900}" --max-minutes "${MAX_MINUTES:-240}" --threads "${THREADS:-2}"
 /usr/bin/python3 "$here/score.py" --model "$out" --width "${WIDTH:-480}" --height "${HEIGHT:-176}" \
   --crop-top "${CROP_TOP:-120}" "$work/val/west-oakland" "${held_dirs[@]}"

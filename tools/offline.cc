@@ -223,6 +223,9 @@ class OfflineMapper {
                 const std::vector<osm::Restriction>& restrictions, std::unique_ptr<seg::Segmenter> model)
       : o_(o), c_(c), model_(std::move(model)), sk_(sk), explorer_(c.lanes.explorerOptions()),
         assembler_(sk, c.lanes.intersections, restrictions) {
+    for (const auto& r : sk.roads()) {
+      for (const auto& p : r.polyline) network_box_.extend(p);
+    }
     startDrive();
   }
 
@@ -232,6 +235,7 @@ class OfflineMapper {
   void startDrive() {
     tracker_ = std::make_unique<tracking::RoadTracker>(sk_, c_.tracker.tracker);
     last_position_.reset();
+    reach_ = DriveReach{};
     builder_ = std::make_unique<bev::BevBuilder>(sk_, c_.vehicle.camera, bevOptions(o_, c_));
     drive_log_ = nlohmann::json::array();
   }
@@ -320,6 +324,19 @@ class OfflineMapper {
     frames_failed_ += m.value("frames_failed", int64_t{0});
   }
   // This drive's frames (a projection's figures): its BEV builder's, before endDrive().
+  // Why this drive (after finish()) cannot have mapped anything of the OSM data, or nothing: no
+  // pose at all, or none within kNearRoadM of a road (a drive of another area, or the wrong --osm).
+  std::optional<std::string> offTheNetwork() const {
+    if (reach_.poses == 0) return "the log holds no usable " + std::string(channels::kPose) + " message (the car's position)";
+    if (reach_.near_roads > 0) return std::nullopt;
+    char what[320];
+    std::snprintf(what, sizeof what,
+                  "none of the drive's %lld poses comes within %.0f m of a road of the OSM data (the nearest is %.1f km "
+                  "from the area its roads cover): a drive of another area, or the wrong --osm?",
+                  static_cast<long long>(reach_.poses), kNearRoadM, reach_.nearest_box_m / 1000.0);
+    return std::string(what);
+  }
+
   nlohmann::json driveFrames() const {
     const auto s = builder_->stats();
     return {{"frames_projected", s.frames_projected}, {"frames_mesh", s.frames_mesh}};
@@ -351,7 +368,17 @@ class OfflineMapper {
 
   void onPose(const pose_t& m) {
     const EnuPose p = toEnuPose(m, sk_.frame());
-    if (p.position.allFinite()) last_position_ = p.position.head<2>();
+    if (p.position.allFinite()) {
+      last_position_ = p.position.head<2>();
+      ++reach_.poses;
+      const double from_box = network_box_.exteriorDistance(*last_position_);
+      if (from_box <= kNearRoadM && !sk_.nearestRoads(*last_position_, kNearRoadM).empty()) {
+        ++reach_.near_roads;
+        reach_.nearest_box_m = 0.0;
+      } else {
+        reach_.nearest_box_m = std::min(reach_.nearest_box_m, from_box);
+      }
+    }
     builder_->addPose(toTimedPose(p));
     for (const auto& e : tracker_->update(toPoseInput(p))) {
       switch (e.type) {
@@ -545,6 +572,14 @@ class OfflineMapper {
   };
   std::map<int64_t, Partial> partial_;            // roads drives ended on, none closed yet
   std::optional<Eigen::Vector2d> last_position_;  // this drive's newest pose (ENU)
+  // Whether this drive came near the OSM data's roads at all (offTheNetwork).
+  static constexpr double kNearRoadM = 50.0;
+  struct DriveReach {
+    int64_t poses = 0, near_roads = 0;
+    double nearest_box_m = std::numeric_limits<double>::infinity();  // of the poses, from network_box_
+  };
+  DriveReach reach_;
+  Eigen::AlignedBox2d network_box_;  // every road polyline point
   DriveProjection* projection_ = nullptr;         // --project-only: the drive's traversals go there
   nlohmann::json partial_not_mapped_ = nlohmann::json::array();
   nlohmann::json drive_log_ = nlohmann::json::array();
@@ -716,6 +751,13 @@ int main(int argc, char** argv) {
         damaged = true;
       }
       mapper.finish();
+      const auto off = mapper.offTheNetwork();
+      if (off) {
+        // Nothing of it can be mapped: a projection of it would only fill the store with nothing,
+        // and a map of it alone would be empty for a reason "no road was mapped" does not tell.
+        if (projection || o.logs.size() == 1) throw std::runtime_error(path + ": " + *off);
+        std::fprintf(stderr, "lanemap-offline: warning: %s: %s; the other drives are mapped\n", path.c_str(), off->c_str());
+      }
       log_read["events"] = log_read["events"].get<int64_t>() + log.events();
       log_read["bytes"] = log_read["bytes"].get<int64_t>() + log.fileSize();
       log_read["bytes_skipped"] = log_read["bytes_skipped"].get<int64_t>() + log.bytesSkipped();
@@ -737,6 +779,7 @@ int main(int argc, char** argv) {
         return 0;
       }
       drives.push_back({{"log", path}, {"merged", mapper.endDrive()}});
+      if (off) drives.back()["not_mapped"] = *off;
     }
     log_read["messages_undecodable"] = g_undecodable + undecodable;
     log_read["damaged"] = damaged;

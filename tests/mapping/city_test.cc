@@ -228,6 +228,32 @@ TEST_F(City, BadInputGetsAClearErrorAndLeavesTheStoreAsItWas) {
   EXPECT_FALSE(fs::exists(tmp_->str("bad/projections/0001")));
   EXPECT_EQ(readFile(tmp_->str("bad/map/map.osm")), map_before);
 
+  // A drive of another area (a small network on another continent): named, not added, and the
+  // map stays; lanemap-offline mapping it alone says why instead of "no road was mapped".
+  const std::string elsewhere = lt::sharedSimDrive("osm/dev/tiny_roundabout.osm", 4, 1, "--no-lidar --camera-hz 5");
+  r = lt::runCommand(city("bad") + " " + elsewhere + "/drive.lcmlog");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("could not be projected"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("poses comes within 50 m of a road of the OSM data"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("a drive of another area, or the wrong --osm?"), std::string::npos) << r.output;
+  int projections = 0;
+  for (const auto& e : fs::directory_iterator(tmp_->str("bad/projections"))) projections += e.is_directory();
+  EXPECT_EQ(projections, 1) << "only the first drive's projection is in the store";
+  EXPECT_EQ(readFile(tmp_->str("bad/map/map.osm")), map_before);
+  r = lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --no-lidar --osm " + osm() + " --log " + elsewhere +
+                     "/drive.lcmlog --out " + tmp_->str("elsewhere"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("poses comes within 50 m of a road of the OSM data"), std::string::npos) << r.output;
+  // Beside a drive of the area: that one is mapped, the other named in summary.json.
+  r = lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --no-lidar --osm " + osm() + " --log " + log(1) + " --log " +
+                     elsewhere + "/drive.lcmlog --out " + tmp_->str("with-elsewhere"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  const auto with = readJson(tmp_->str("with-elsewhere/summary.json"));
+  ASSERT_EQ(with["drives"].size(), 2u);
+  EXPECT_FALSE(with["drives"][0].contains("not_mapped"));
+  EXPECT_NE(with["drives"][1].value("not_mapped", std::string()).find("a drive of another area"), std::string::npos) << with.dump();
+  EXPECT_GT(with["lanelets"].get<int>(), 0);
+
   // A projection of another format (an older lanemap): named, and the map stays.
   fs::copy(tmp_->str("bad/projections/0000"), tmp_->str("bad/projections/0005"));
   auto m = readJson(tmp_->str("bad/projections/0005/projection.json"));

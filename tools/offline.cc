@@ -499,12 +499,14 @@ class OfflineMapper {
       const auto carried = mapping::lanesRunningThrough(sk_, *r, assembler_.roads(), explorer_, &before);
       auto [res, lanes_of_road, dropped, carried_in] =
           mapping::exploreRoadLanes(grid, geometry, partial, explorer_, sk_.frame().origin(), carried);
-      if (carried_in) entry["lanes_carried_from"] = before;
+      // Lanes from the road's own OSM way stand in until a road meeting it gets lanes to carry.
+      const bool from_osm_way = carried_in && before == road_id;
+      if (carried_in) entry[from_osm_way ? "lanes_from_osm_way" : "lanes_carried_from"] = from_osm_way ? nlohmann::json(true) : nlohmann::json(before);
       for (const auto& why : dropped) std::fprintf(stderr, "\rlanemap-offline: road %lld: lanelet left out, %s\n", static_cast<long long>(road_id), why.c_str());
       if (!dropped.empty()) entry["lanes_dropped"] = dropped;
       crosswalks_[road_id] = lanes::findCrosswalks(grid, lanes_of_road, 1);
       assembler_.setRoad(road_id, std::move(lanes_of_road));
-      has_lanes = !res.lanes.empty();
+      has_lanes = !res.lanes.empty() && !from_osm_way;
       if (!partial && !has_lanes && mapping::isShortRoad(*r, explorer_)) {
         awaiting_.insert_or_assign(road_id, grid);
       } else {

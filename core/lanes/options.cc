@@ -64,6 +64,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("partial_min_driven_m", o.partial_min_driven_m);
   r.read("carry_lanes_max_m", o.carry_lanes_max_m);
   r.read("carry_max_turn_rad", o.carry_max_turn_rad);
+  r.read("lanes_from_osm_way", o.lanes_from_osm_way);
   r.read("split_neighbour_m", o.split_neighbour_m);
   r.read("bulge_density_fraction", o.bulge_density_fraction);
   r.read("min_drivable_share", o.min_drivable_share);

@@ -92,6 +92,8 @@ struct ExplorerOptions {
                                          //   lanes of the road leading straight into it (carried_lanes.h)
                                          //   when exploring found no lane on it (0: never)
   double carry_max_turn_rad = 0.35;      // ... "straight": its heading turns by at most this at the junction
+  bool lanes_from_osm_way = true;        // ... and when no mapped road runs straight into or out of it,
+                                         //   the lanes its own OSM way gives (carried_lanes.h lanesFromOsmWay)
   double split_neighbour_m = 4.5;        // a lane born/ending this close to another splits/merges
   double bulge_density_fraction = 0.15;  // a lane that splits off or merges into a lane with fewer
                                          //   particles per metre than this fraction of that lane's

@@ -132,7 +132,43 @@ std::vector<lanes::CarriedLane> lanesRunningThrough(const skeleton::Skeleton& sk
                                                     const lanes::ExplorerOptions& o, int64_t* from_road) {
   auto carried = lanesLeadingInto(skeleton, road, mapped, o, from_road);
   if (carried.empty()) carried = lanesLeadingOutOf(skeleton, road, mapped, o, from_road);
+  if (carried.empty() && o.lanes_from_osm_way) {
+    carried = lanesFromOsmWay(road, o);
+    if (from_road && !carried.empty()) *from_road = road.id;
+  }
   return carried;
+}
+
+std::vector<lanes::CarriedLane> lanesFromOsmWay(const skeleton::AtomicRoad& road, const lanes::ExplorerOptions& o) {
+  std::vector<lanes::CarriedLane> out;
+  if (!isShortRoad(road, o)) return out;
+  const bool two_way = road.reverse_id >= 0;
+  const auto count = [&](const std::string& key) {
+    const auto it = road.tags.find(key);
+    if (it == road.tags.end()) return 0;
+    try {
+      return std::max(0, std::stoi(it->second));
+    } catch (const std::exception&) {
+      return 0;  // "2;3" and the like: not a count
+    }
+  };
+  int n = two_way ? count(road.along_way ? "lanes:forward" : "lanes:backward") : 0;
+  if (n == 0) n = two_way ? (count("lanes") + 1) / 2 : count("lanes");
+  n = std::clamp(n, 1, 8);
+  const double w = 2.0 * o.default_half_width_m;
+  for (int k = 0; k < n; ++k) {  // left to right
+    lanes::CarriedLane l;
+    l.half_left_m = l.half_right_m = o.default_half_width_m;
+    if (!two_way) {
+      l.d = (0.5 * (n - 1) - k) * w;
+    } else if (o.right_hand_traffic) {
+      l.d = -(k + 0.5) * w;          // right of the line, the lane next to it first
+    } else {
+      l.d = (n - k - 0.5) * w;       // left of the line, the outermost first
+    }
+    out.push_back(l);
+  }
+  return out;
 }
 
 std::vector<int64_t> roadsAwaitingLanesFrom(const skeleton::Skeleton& skeleton, int64_t mapped_road,

@@ -48,9 +48,19 @@ std::vector<lanes::CarriedLane> lanesLeadingOutOf(const skeleton::Skeleton& skel
                                                   const std::map<int64_t, map::LaneMap>& mapped,
                                                   const lanes::ExplorerOptions& options, int64_t* to_road = nullptr);
 
+// A short road's lanes as its own OSM way gives them, for a link no mapped road runs straight
+// into or out of (the crossing between the two carriageways of a divided road, entered and left
+// by turns): its lanes in this direction from the way's lanes:forward / lanes:backward, else
+// lanes (halved on a two-way way, rounded up), else 1; each 2 x default_half_width_m wide with
+// virtual bounds, side by side right of the way's line on a two-way way (left of it in left-hand
+// traffic), centred on it on a one-way way. Nothing was seen of them: no particle supports them,
+// which their confidence says. Empty for a road that is not short.
+std::vector<lanes::CarriedLane> lanesFromOsmWay(const skeleton::AtomicRoad& road, const lanes::ExplorerOptions& options);
+
 // What a short road takes: the lanes of the road before, else those of the road after (a link
-// the car turned into from a side street still runs on straight into the road beyond it).
-// *from_road: the road they come from (-1 if none).
+// the car turned into from a side street still runs on straight into the road beyond it), else
+// with options.lanes_from_osm_way those of its own OSM way (lanesFromOsmWay; *from_road is then
+// the road itself). *from_road: the road they come from (-1 if none).
 std::vector<lanes::CarriedLane> lanesRunningThrough(const skeleton::Skeleton& skeleton, const skeleton::AtomicRoad& road,
                                                     const std::map<int64_t, map::LaneMap>& mapped,
                                                     const lanes::ExplorerOptions& options, int64_t* from_road = nullptr);

@@ -183,13 +183,15 @@ class LaneMapperApp {
     const std::optional<map::PartialRoad> driven_to =
         partial ? std::optional<map::PartialRoad>(map::PartialRoad{partial->station_m, partial->road_length_m}) : std::nullopt;
     std::vector<lanes::CarriedLane> carried;  // a short road's lanes may run on from the road before
+    int64_t carried_from = -1;                 // that road; the road itself: its OSM way's lanes
     {
       std::lock_guard<std::mutex> lock(roads_mutex_);
-      carried = mapping::lanesRunningThrough(*sk_, *road, assembler_->roads(), options_);
+      carried = mapping::lanesRunningThrough(*sk_, *road, assembler_->roads(), options_, &carried_from);
     }
     auto [res, m, dropped, carried_in] =
         mapping::exploreRoadLanes(grid, geometry, driven_to, options_, sk_->frame().origin(), carried);
-    if (carried_in) process_.counters().add("roads_lanes_carried");
+    const bool from_osm_way = carried_in && carried_from == road->id;
+    if (carried_in) process_.counters().add(from_osm_way ? "roads_lanes_from_osm_way" : "roads_lanes_carried");
     for (const auto& why : dropped) std::cerr << "lane_mapper: road " << job.road_id << ": lanelet left out, " << why << "\n";
     process_.counters().add("lanelets_dropped", static_cast<int64_t>(dropped.size()));
     if (partial) process_.counters().add("roads_partial");
@@ -214,12 +216,14 @@ class LaneMapperApp {
     process_.counters().add("lanes_found", static_cast<int64_t>(res.lanes.size()));
     if (export_interval_ == Clock::duration::zero()) exportWholeMap();  // before LANE_MAP: its map_path holds the road
     publish(job.road_id, m, job.utime);
-    awaitLanes(*road, job.path, !res.lanes.empty(), partial.has_value());
+    // Lanes from the road's own OSM way stand in until a road meeting it gets lanes to carry.
+    awaitLanes(*road, job.path, !res.lanes.empty() && !from_osm_way, partial.has_value());
   }
 
-  // A short road mapped with no lane (nothing explored, no mapped road beside it to carry from)
-  // waits with its grid's path; when a road meeting it gets lanes it is mapped again from that
-  // grid (core/mapping/carried_lanes.h).
+  // A short road mapped with no lane (nothing explored, no mapped road beside it to carry from;
+  // or only its OSM way's lanes) waits with its grid's path; when a road meeting it gets lanes it
+  // is mapped again from that grid (core/mapping/carried_lanes.h). (After a restart only a road
+  // with no lane waits again.)
   void awaitLanes(const skeleton::AtomicRoad& road, const std::string& grid, bool has_lanes, bool partial) {
     if (!has_lanes) {
       if (!partial && mapping::isShortRoad(road, options_)) awaiting_[road.id] = grid;

@@ -334,6 +334,7 @@ TEST(LaneMapperProcess, ExportIntervalWritesTheWholeMapAtMostThatOftenAndAtStop)
 // (core/mapping/carried_lanes.h lanesLeadingOutOf): STATUS roads_mapped_again, its LANE_MAP
 // again with the road after's two lanes at their offsets from the OSM line.
 TEST(LaneMapperProcess, AShortRoadMappedWithNoLaneTakesTheLanesOfTheRoadAfterOnceItIsMapped) {
+  // (Mapped first with the lanes of its own OSM way, which stand in until then.)
   if (!lanemap::testing::inPrivateNetns()) {
     ASSERT_EQ(lanemap::testing::rerunInPrivateNetns(), 0);
     return;
@@ -398,7 +399,21 @@ TEST(LaneMapperProcess, AShortRoadMappedWithNoLaneTakesTheLanesOfTheRoadAfterOnc
     const bev_road_t first = bevRoad(*link, link_grid);
     lcm.publish("BEV_ROAD", &first);
     ASSERT_TRUE(waitFor(lcm, [&] { return mapsOf(link->id).size() == 1; }, 30)) << "no LANE_MAP of the link";
-    EXPECT_EQ(mapsOf(link->id)[0].num_lanes, 0) << "nothing drivable, nothing to carry yet";
+    // Nothing drivable, nothing to carry yet: its own OSM way's lanes (two-way: right of its line,
+    // the first 1.75 m from it), standing in until a road meeting it gets lanes.
+    {
+      const lane_map_t stand_in = mapsOf(link->id)[0];
+      ASSERT_GE(stand_in.num_lanes, 1) << "no lane from the link's OSM way";
+      const lanes::ExplorerOptions eo;
+      const lanes::FrenetFrame frame(link->polyline, eo.frame_spacing_m, eo.frame_smoothing_m);
+      for (const auto& lane : stand_in.lanes) {
+        const double expected = -1.75 - 3.5 * lane.index_from_left;
+        for (int i = 0; i < lane.centre.num_points; ++i) {
+          const Eigen::Vector2d sd = frame.toFrenet(Eigen::Vector2d(lane.centre.east[i], lane.centre.north[i]));
+          EXPECT_NEAR(sd.y(), expected, 0.05) << "lane " << lane.index_from_left << " point " << i;
+        }
+      }
+    }
     fs::create_directories(fs::path(after_grid).parent_path());
     lanes::testing::paint(layout).save(after_grid);
     const bev_road_t second = bevRoad(*after, after_grid);
@@ -406,6 +421,7 @@ TEST(LaneMapperProcess, AShortRoadMappedWithNoLaneTakesTheLanesOfTheRoadAfterOnc
     ASSERT_TRUE(waitFor(lcm, [&] { return mapsOf(link->id).size() == 2; }, 30)) << "the link was not mapped again";
     ASSERT_TRUE(waitFor(lcm, [&] { return statusCounter(c.status.back(), "roads_mapped") == 3; }, 5));
     EXPECT_EQ(statusCounter(c.status.back(), "roads_mapped_again"), 1);
+    EXPECT_EQ(statusCounter(c.status.back(), "roads_lanes_from_osm_way"), 1);
     EXPECT_EQ(statusCounter(c.status.back(), "roads_lanes_carried"), 1);
     EXPECT_EQ(statusCounter(c.status.back(), "roads_failed", 0), 0);
     EXPECT_GE(proc.stop(), 0);

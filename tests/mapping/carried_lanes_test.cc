@@ -237,5 +237,109 @@ TEST(CarriedLanes, OneLaneCarriedTwiceIsOneLane) {
   EXPECT_NEAR(shortest.lanes[0].s_end - shortest.lanes[0].s_begin, o.short_road_min_m, 1e-9);
 }
 
+// A link no mapped road runs straight into or out of (the crossing between the two carriageways of
+// a divided road, entered and left by turns) takes its own OSM way's lanes: their count from the
+// way's tags, default widths, right of a two-way way's line, centred on a one-way way's.
+skeleton::AtomicRoad osmLink(bool two_way, const osm::Tags& tags, bool along_way = true) {
+  skeleton::AtomicRoad r;
+  r.id = 7;
+  r.from = 1;
+  r.to = 2;
+  r.reverse_id = two_way ? 8 : -1;
+  r.along_way = along_way;
+  r.polyline = {{0.0, 0.0}, {20.0, 0.0}};
+  r.length = 20.0;
+  r.s_begin = 6.0;
+  r.s_end = 14.0;  // 8 m between the ROIs: short
+  r.tags = tags;
+  return r;
+}
+
+std::vector<double> offsets(const std::vector<lanes::CarriedLane>& lanes) {
+  std::vector<double> d;
+  for (const auto& l : lanes) d.push_back(l.d);
+  return d;
+}
+
+TEST(CarriedLanes, ALinkNothingRunsStraightIntoTakesItsOwnOsmWaysLanes) {
+  lanes::ExplorerOptions o;
+  using V = std::vector<double>;
+  // Two-way: one lane a direction unless the tags say more, right of the line, left to right.
+  EXPECT_EQ(offsets(mapping::lanesFromOsmWay(osmLink(true, {}), o)), (V{-1.75}));
+  EXPECT_EQ(offsets(mapping::lanesFromOsmWay(osmLink(true, {{"lanes", "4"}}), o)), (V{-1.75, -5.25}));
+  EXPECT_EQ(offsets(mapping::lanesFromOsmWay(osmLink(true, {{"lanes", "3"}}), o)), (V{-1.75, -5.25}));  // rounded up
+  EXPECT_EQ(offsets(mapping::lanesFromOsmWay(osmLink(true, {{"lanes", "3"}, {"lanes:forward", "1"}, {"lanes:backward", "2"}}), o)),
+            (V{-1.75}));
+  EXPECT_EQ(offsets(mapping::lanesFromOsmWay(osmLink(true, {{"lanes", "3"}, {"lanes:forward", "1"}, {"lanes:backward", "2"}}, false), o)),
+            (V{-1.75, -5.25}));  // against the way's direction: its backward lanes
+  EXPECT_EQ(offsets(mapping::lanesFromOsmWay(osmLink(true, {{"lanes", "2;3"}}), o)), (V{-1.75}));  // not a count: one
+  // One-way: centred on the line.
+  EXPECT_EQ(offsets(mapping::lanesFromOsmWay(osmLink(false, {}), o)), (V{0.0}));
+  EXPECT_EQ(offsets(mapping::lanesFromOsmWay(osmLink(false, {{"lanes", "3"}}), o)), (V{3.5, 0.0, -3.5}));
+  // Left-hand traffic: left of the line, still left to right.
+  lanes::ExplorerOptions left = o;
+  left.right_hand_traffic = false;
+  EXPECT_EQ(offsets(mapping::lanesFromOsmWay(osmLink(true, {{"lanes", "4"}}), left)), (V{5.25, 1.75}));
+  for (const auto& l : mapping::lanesFromOsmWay(osmLink(true, {{"lanes", "4"}}), o)) {
+    EXPECT_EQ(l.half_left_m, o.default_half_width_m);
+    EXPECT_EQ(l.half_right_m, o.default_half_width_m);
+    EXPECT_EQ(l.left_type, map::LineType::kVirtual) << "nothing was seen of its lines";
+  }
+  // A road that is not short: nothing (its own evidence decides, or it has no lane).
+  skeleton::AtomicRoad long_road = osmLink(true, {});
+  long_road.s_end = 6.0 + o.carry_lanes_max_m + 1.0;
+  EXPECT_TRUE(mapping::lanesFromOsmWay(long_road, o).empty());
+
+  // lanesRunningThrough falls back to them, naming the road itself, only when asked to.
+  const std::map<int64_t, map::LaneMap> none;
+  const World& w = lanemap::testing::westOaklandTruthWorld();
+  // Any West Oakland road as if short, with no road mapped around it.
+  lanes::ExplorerOptions all_short = o;
+  all_short.carry_lanes_max_m = 1e9;
+  const skeleton::AtomicRoad& some = w.sk->roads().front();
+  int64_t via = -1;
+  EXPECT_FALSE(mapping::lanesRunningThrough(*w.sk, some, none, all_short, &via).empty());
+  EXPECT_EQ(via, some.id);
+  all_short.lanes_from_osm_way = false;
+  EXPECT_TRUE(mapping::lanesRunningThrough(*w.sk, some, none, all_short, &via).empty());
+  EXPECT_EQ(via, -1);
+}
+
+// On the simulator's West Oakland world (every road as if short, its truth known): where the
+// truth has as many lanes this way as the OSM way says, the OSM way's lanes lie near the truth's.
+TEST(CarriedLanes, TheOsmWaysLanesLieNearTheTruthWhereTheCountsAgree) {
+  const World& w = lanemap::testing::westOaklandTruthWorld();
+  lanes::ExplorerOptions o;
+  o.carry_lanes_max_m = 1e9;
+  std::vector<double> errors;
+  int counts_differ = 0;
+  for (const auto& road : w.sk->roads()) {
+    auto own = w.roads.find(road.id);
+    if (own == w.roads.end() || own->second.lanelets.empty()) continue;
+    const auto lanes = mapping::lanesFromOsmWay(road, o);
+    const lanes::RoadGeometry geometry = lanes::RoadGeometry::fromSkeleton(road);
+    const lanes::ExplorationResult r = lanes::carryLanesThrough(geometry, lanes, o);
+    const double s = 0.5 * (r.lanes.front().s_begin + r.lanes.front().s_end);
+    const auto truth = truthOffsets(own->second, *r.frame, s);
+    if (truth.size() != lanes.size()) {
+      ++counts_differ;
+      continue;
+    }
+    for (const auto& lane : r.lanes) {
+      double nearest = INFINITY;
+      for (double d : truth) nearest = std::min(nearest, std::abs(d - lane.centre.d(s)));
+      errors.push_back(nearest);
+    }
+  }
+  ASSERT_GE(errors.size(), 20u);
+  std::sort(errors.begin(), errors.end());
+  const double median = errors[errors.size() / 2];
+  const double within_half_metre = static_cast<double>(std::upper_bound(errors.begin(), errors.end(), 0.5) - errors.begin()) / errors.size();
+  std::printf("OSM way's lanes vs truth: %zu lanes, median %.2f m, %.0f %% within 0.5 m; roads whose counts differ: %d\n",
+              errors.size(), median, 100.0 * within_half_metre, counts_differ);
+  EXPECT_LT(median, 0.3) << "a lane from the OSM way lies off its truth lane";
+  EXPECT_GT(within_half_metre, 0.9);
+}
+
 }  // namespace
 }  // namespace lanemap

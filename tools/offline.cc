@@ -323,20 +323,26 @@ class OfflineMapper {
     frames_segmented_ += m.value("frames_segmented", int64_t{0});
     frames_failed_ += m.value("frames_failed", int64_t{0});
   }
-  // This drive's frames (a projection's figures): its BEV builder's, before endDrive().
   // Why this drive (after finish()) cannot have mapped anything of the OSM data, or nothing: no
   // pose at all, or none within kNearRoadM of a road (a drive of another area, or the wrong --osm).
   std::optional<std::string> offTheNetwork() const {
     if (reach_.poses == 0) return "the log holds no usable " + std::string(channels::kPose) + " message (the car's position)";
     if (reach_.near_roads > 0) return std::nullopt;
-    char what[320];
+    char where[96];
+    if (reach_.nearest_box_m > 0.0) {
+      std::snprintf(where, sizeof where, "the nearest is %.1f km from the area its roads cover", reach_.nearest_box_m / 1000.0);
+    } else {
+      std::snprintf(where, sizeof where, "some lie within the area its roads cover, off its roads");
+    }
+    char what[384];
     std::snprintf(what, sizeof what,
-                  "none of the drive's %lld poses comes within %.0f m of a road of the OSM data (the nearest is %.1f km "
-                  "from the area its roads cover): a drive of another area, or the wrong --osm?",
-                  static_cast<long long>(reach_.poses), kNearRoadM, reach_.nearest_box_m / 1000.0);
+                  "none of the drive's %lld poses comes within %.0f m of a road of the OSM data (%s): a drive of another "
+                  "area, or the wrong --osm?",
+                  static_cast<long long>(reach_.poses), kNearRoadM, where);
     return std::string(what);
   }
 
+  // This drive's frames (a projection's figures): its BEV builder's, before endDrive().
   nlohmann::json driveFrames() const {
     const auto s = builder_->stats();
     return {{"frames_projected", s.frames_projected}, {"frames_mesh", s.frames_mesh}};

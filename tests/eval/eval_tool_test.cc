@@ -88,7 +88,7 @@ TEST(EvalTool, JsonKeysAndValuesOnAMissingLane) {
 // matched; the pair A1 -> B1 missed for want of it); drive 2 connects A1 to C0 instead of B1 (all
 // lanes detected: a truth pair missed and a built pair wrong between detected lanes); drive 3
 // has its lane A1 2 m off (whatever lanemap-eval says of it, the table's counts add up to its
-// totals).
+// totals). Then --compare lists the one network whose reports differ between two labels.
 TEST(EvalTool, TheBenchmarkTableSaysWhereTheMissesAre) {
   TempDir dir("quality-table");
   const auto truth = located(lanemap::testing::network({}));
@@ -147,6 +147,28 @@ TEST(EvalTool, TheBenchmarkTableSaysWhereTheMissesAre) {
   EXPECT_EQ(m2["pairs_wrong_both_detected"].get<int>(), 1);   // A1 -> C0
   EXPECT_EQ(m2["pairs_missed_lane"].get<int>() + m2["pairs_wrong_lane"].get<int>(), 0);
   EXPECT_NE(r.output.find("misses: truth lanes"), std::string::npos) << r.output;
+
+  // --compare A B: the networks whose figures differ, A's row above B's. Label "b" is "test" with
+  // drive 3's report replaced by drive 1's; a second network ("other") has the same report under
+  // both and is not listed.
+  namespace fs = std::filesystem;
+  for (int k = 1; k <= 3; ++k) {
+    const std::string d = dir.str("net-s" + std::to_string(k));
+    fs::copy_file(k == 3 ? dir.str("net-s1/eval-test.json") : d + "/eval-test.json", d + "/eval-b.json");
+  }
+  fs::create_directories(dir.str("other-s1/drive"));
+  for (const char* lab : {"test", "b"}) fs::copy_file(dir.str("net-s2/eval-test.json"), dir.str("other-s1/eval-") + lab + ".json");
+  const auto c = runCommand("python3 " + dataPath("../tools/bench/quality_table.py") + " " + dir.str("") + " test b --compare test b");
+  ASSERT_EQ(c.exit_code, 0) << c.output;
+  const std::string table = c.output.substr(c.output.find("== test -> b"));
+  EXPECT_NE(table.find("1 of 2 networks changed"), std::string::npos) << table;
+  size_t rows = 0;
+  for (size_t at = table.find("\n   net "); at != std::string::npos; at = table.find("\n   net ", at + 1)) ++rows;
+  EXPECT_EQ(rows, 2u) << table;
+  EXPECT_EQ(table.find("\n   other "), std::string::npos) << table;
+  EXPECT_NE(table.find("POOLED test"), std::string::npos) << table;
+  EXPECT_NE(table.find("POOLED b"), std::string::npos) << table;
+  EXPECT_NE(runCommand("python3 " + dataPath("../tools/bench/quality_table.py") + " " + dir.str("") + " test --compare test").exit_code, 0);
 }
 
 TEST(EvalTool, OriginOfOurFilesIsTheWritersOrigin) {

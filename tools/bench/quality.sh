@@ -21,6 +21,10 @@
 #   TRAINED_ON=monaco the networks the segmentation model was trained on (comma-separated; the
 #                     shipped model: Monaco, models/README.md): the model's rows are also pooled
 #                     over those and over the networks it never saw
+#   LANES_CONFIG=FILE, TAG=NAME   judge a change to the mapping stages: map the kept projections
+#                     with this lane mapper config (default: the shipped one) into map-LABEL-NAME
+#                     (eval-LABEL-NAME.json), and end with a table of the networks whose figures
+#                     differ from the untagged run's on the same OUT_DIR (quality_table.py --compare)
 # Drives already simulated in OUT_DIR are reused, and so are their projections (neither depends on
 # the mapping stages: after a change there, run again on the same OUT_DIR); the maps and scores are
 # always made anew.
@@ -39,6 +43,7 @@ labels=${LABELS:-oracle model}
 jobs=${JOBS:-$(nproc)}
 lidar=${LIDAR:-1}
 root=$(cd "$(dirname "$0")/../.." && pwd)
+tag=${TAG:+-$TAG}
 if [ -z "${NETWORKS:-}" ]; then
   NETWORKS="west-oakland.osm monaco.osm.pbf $(cd "$root/data/osm" && ls dev/*.osm | tr '\n' ' ')"
   NETWORKS+=" lanelet2:karlsruhe_mapping_example.osm"
@@ -46,6 +51,11 @@ fi
 sim_flags=()
 map_flags=()
 if [ "$lidar" = 0 ]; then sim_flags+=(--no-lidar); map_flags+=(--no-lidar); fi
+if [ -n "${LANES_CONFIG:-}" ]; then
+  [ -n "$tag" ] || { echo "quality.sh: LANES_CONFIG needs TAG (the maps it makes are named by it)" >&2; exit 2; }
+  [ -f "$LANES_CONFIG" ] || { echo "quality.sh: no such lane mapper config: $LANES_CONFIG" >&2; exit 2; }
+  LANES_CONFIG=$(cd "$(dirname "$LANES_CONFIG")" && pwd)/$(basename "$LANES_CONFIG")
+fi
 
 # One drive: simulate (unless already there), map on each label source, score.
 run_one() {
@@ -65,9 +75,10 @@ run_one() {
     fi
   fi
   for lab in $labels; do
-    local flags=()
+    local flags=() lanes_cfg=() m="$lab$tag"
     [ "$lab" = oracle ] && flags=(--oracle)
-    rm -rf "$d/map-$lab"
+    [ -n "${LANES_CONFIG:-}" ] && lanes_cfg=(--lanes-config "$LANES_CONFIG")
+    rm -rf "$d/map-$m"
     # The drive's projection (segmentation, BEV, road tracking: what lanemap-offline --project-only
     # hands over) is kept and reused: the mapping stages run on it (--traversals), which gives the
     # map --log would (tests/mapping/city_test.cc). REPROJECT=1 after a change before them.
@@ -77,23 +88,23 @@ run_one() {
         "${flags[@]}" "${map_flags[@]}" >"$d/project-$lab.log" 2>&1 || rm -rf "$d/proj-$lab"
     fi
     if [ ! -f "$d/proj-$lab/projection.json" ] ||
-      ! "$bin/lanemap-offline" -q --traversals "$d/proj-$lab" --osm "$d/drive/roads.osm" --out "$d/map-$lab" \
-        "${map_flags[@]}" >"$d/offline-$lab.log" 2>&1; then
-      [ -f "$d/proj-$lab/projection.json" ] || cp "$d/project-$lab.log" "$d/offline-$lab.log"
+      ! "$bin/lanemap-offline" -q --traversals "$d/proj-$lab" --osm "$d/drive/roads.osm" --out "$d/map-$m" \
+        "${map_flags[@]}" "${lanes_cfg[@]}" >"$d/offline-$m.log" 2>&1; then
+      [ -f "$d/proj-$lab/projection.json" ] || cp "$d/project-$lab.log" "$d/offline-$m.log"
       # No map at all (nothing mapped, or the run failed): scored as an empty map, every driven lane missed.
-      echo "   $name ($lab): lanemap-offline failed: $(tail -n 1 "$d/offline-$lab.log")"
-      mkdir -p "$d/map-$lab"
-      echo '<?xml version="1.0"?><osm version="0.6" generator="lanemap quality.sh: no map"/>' >"$d/map-$lab/map.osm"
-      touch "$d/map-$lab/FAILED"
+      echo "   $name ($m): lanemap-offline failed: $(tail -n 1 "$d/offline-$m.log")"
+      mkdir -p "$d/map-$m"
+      echo '<?xml version="1.0"?><osm version="0.6" generator="lanemap quality.sh: no map"/>' >"$d/map-$m/map.osm"
+      touch "$d/map-$m/FAILED"
     fi
-    "$bin/lanemap-eval" -q --truth "$d/drive/groundtruth.osm" --map "$d/map-$lab/map.osm" \
-      --driven "$d/drive/scenario.json" --json "$d/eval-$lab.json" >"$d/eval-$lab.log" 2>&1 ||
-      echo "   $name ($lab): lanemap-eval failed (see $d/eval-$lab.log)"
+    "$bin/lanemap-eval" -q --truth "$d/drive/groundtruth.osm" --map "$d/map-$m/map.osm" \
+      --driven "$d/drive/scenario.json" --json "$d/eval-$m.json" >"$d/eval-$m.log" 2>&1 ||
+      echo "   $name ($m): lanemap-eval failed (see $d/eval-$m.log)"
   done
   echo "   $name done"
 }
 export -f run_one
-export out bin root secs labels
+export out bin root secs labels tag LANES_CONFIG
 export sim_flags_str="${sim_flags[*]:-}" map_flags_str="${map_flags[*]:-}"
 
 echo "== broad benchmark: $(echo $NETWORKS | wc -w) networks x seeds {$seeds}, ${secs} s each, labels {$labels}, LIDAR=$lidar, $jobs at once"
@@ -108,4 +119,17 @@ printf '%s\n' "${tasks[@]}" | xargs -P "$jobs" -L 1 bash -c '
   sim_flags=($sim_flags_str); map_flags=($map_flags_str); run_one "$0" "$1"'
 echo "   wall $(( $(date +%s) - t0 )) s"
 
-python3 "$root/tools/bench/quality_table.py" "$out" $labels --trained-on "${TRAINED_ON:-monaco}"
+if [ -z "$tag" ]; then
+  python3 "$root/tools/bench/quality_table.py" "$out" $labels --trained-on "${TRAINED_ON:-monaco}"
+else
+  # The tagged maps' tables, then each beside the untagged run's on the same drives, where there is one.
+  tagged=""
+  for lab in $labels; do tagged+=" $lab$tag"; done
+  python3 "$root/tools/bench/quality_table.py" "$out" $tagged --trained-on "${TRAINED_ON:-monaco}"
+  for lab in $labels; do
+    if ls "$out"/*/eval-"$lab".json > /dev/null 2>&1; then
+      python3 "$root/tools/bench/quality_table.py" "$out" "$lab" "$lab$tag" --trained-on "${TRAINED_ON:-monaco}" --compare "$lab" "$lab$tag" |
+        sed -n '/^== .* -> /,$p'
+    fi
+  done
+fi

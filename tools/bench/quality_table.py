@@ -20,7 +20,13 @@ quality.sh passes TRAINED_ON) two more pooled rows for the model's labels split 
 whether the model saw them. (The shipped model's Monaco frames came from seeds 1-40, the
 benchmark's seeds among them; train.sh's RECIPE=many renders seeds 201 and up.)
 
-Usage: quality_table.py OUT_DIR LABEL [LABEL ...] [--trained-on NET,NET,...]
+With --compare A B (two of the labels: a map before and after a change, e.g. quality.sh's
+"model" and "model-TAG"), a last table lists each network whose figures differ between A and B,
+A's row above B's, then both pooled rows and the networks beating the paper under each: what a
+change to the mapping stages did, network by network (judge it on the pooled rows and on every
+network it made worse).
+
+Usage: quality_table.py OUT_DIR LABEL [LABEL ...] [--trained-on NET,NET,...] [--compare A B]
        (also writes OUT_DIR/quality.json)
 """
 import json
@@ -125,9 +131,54 @@ def trained_networks(argv):
     return set(n for n in names if n)
 
 
+def compare_labels(argv):
+    """--compare A B (removed from argv): the two labels to compare, or None."""
+    if "--compare" not in argv:
+        return None
+    i = argv.index("--compare")
+    pair = argv[i + 1:i + 3]
+    del argv[i:i + 3]
+    if len(pair) != 2:
+        sys.exit("quality_table.py: --compare needs two labels")
+    return pair
+
+
+def row(name, c):
+    f = figures(c)
+    return (f"   {name:28s} {c.get('drives', 0):6d} " + " ".join(fmt(f[k]) for k in KEYS) +
+            f"  {c.get('det', 0):6d}/{c.get('built', 0):6d}/{c.get('truth', 0):6d}"
+            f"   {c.get('ok', 0):5d}/{c.get('bp', 0):5d}/{c.get('tp', 0):5d}")
+
+
+def beats_paper(c):
+    return all(figures(c)[k] > PAPER[k] for k in ("lane_p", "lane_r", "junc_p", "junc_r"))
+
+
+def print_comparison(result, a, b):
+    if a not in result or b not in result:
+        sys.exit(f"quality_table.py: --compare {a} {b}: both must be among the labels")
+    na, nb = result[a]["networks"], result[b]["networks"]
+    print(f"\n== {a} -> {b}: the networks whose figures differ ({a} above, {b} below)")
+    changed = 0
+    for n in sorted(set(na) | set(nb)):
+        ca, cb = na.get(n, {}).get("counts", {}), nb.get(n, {}).get("counts", {})
+        if row(n, ca) == row(n, cb):
+            continue
+        changed += 1
+        print(row(n, ca))
+        print(row(n, cb))
+    print(f"   {changed} of {len(set(na) | set(nb))} networks changed")
+    print(row(f"POOLED {a}", result[a]["pooled"]["counts"]))
+    print(row(f"POOLED {b}", result[b]["pooled"]["counts"]))
+    for lab, nets in ((a, na), (b, nb)):
+        beat = sorted(n for n, v in nets.items() if beats_paper(v["counts"]))
+        print(f"   beating the paper under {lab}: {len(beat)} ({', '.join(beat)})")
+
+
 def main():
     argv = sys.argv[1:]
     trained = trained_networks(argv)
+    compare = compare_labels(argv)
     out, labels = argv[0], argv[1:]
     drives = sorted(d for d in os.listdir(out) if os.path.isdir(os.path.join(out, d, "drive")))
     result = {}
@@ -167,16 +218,14 @@ def main():
                     rows.append((f"POOLED, {group} ({len(nets)})", c))
                     result[lab]["groups"][group] = {**figures(c), "counts": c, "networks": nets}
         for n, c in rows:
-            f = figures(c)
-            print(f"   {n:28s} {c.get('drives', 0):6d} " + " ".join(fmt(f[k]) for k in KEYS) +
-                  f"  {c.get('det', 0):6d}/{c.get('built', 0):6d}/{c.get('truth', 0):6d}"
-                  f"   {c.get('ok', 0):5d}/{c.get('bp', 0):5d}/{c.get('tp', 0):5d}")
+            print(row(n, c))
         print(f"   {'paper (Berkeley LIDAR+Cam)':28s} {'':6s} " + " ".join(fmt(PAPER[k]) for k in KEYS))
         print(f"   {'paper (Berkeley Cam only)':28s} {'':6s} " + " ".join(fmt(PAPER_CAM[k]) for k in KEYS))
-        beat = [n for n, c in per_net.items()
-                if all(figures(c)[k] > PAPER[k] for k in ("lane_p", "lane_r", "junc_p", "junc_r"))]
+        beat = [n for n, c in per_net.items() if beats_paper(c)]
         print(f"   networks that beat the paper on lane P/R and junction P/R: {len(beat)} of {len(per_net)}")
         print(misses_line(total_misses))
+    if compare:
+        print_comparison(result, *compare)
     clean = lambda v: {k: clean(x) for k, x in v.items()} if isinstance(v, dict) else (
         None if isinstance(v, float) and math.isnan(v) else v)
     with open(os.path.join(out, "quality.json"), "w") as f:

@@ -44,7 +44,8 @@
 //    The centre line then moves to midway between its bounds, by the median offset over the
 //    way-points where both were found, at most recentre_max_m (recentreOnBounds): the particles'
 //    mean lies midway between the lines' near edges, off by up to a fifth of a metre beside a
-//    double line or a kerb.
+//    double line or a kerb. A lane split off another (a turn pocket) then starts where its taper
+//    does, not where a footprint first fitted beside its parent (extendPocketsToTheirTaper).
 #pragma once
 
 #include "core/bev/bev_grid.h"

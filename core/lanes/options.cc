@@ -66,6 +66,8 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("carry_max_turn_rad", o.carry_max_turn_rad);
   r.read("lanes_from_osm_way", o.lanes_from_osm_way);
   r.read("split_neighbour_m", o.split_neighbour_m);
+  r.read("pocket_taper_max_m", o.pocket_taper_max_m);
+  r.read("pocket_min_width_m", o.pocket_min_width_m);
   r.read("bulge_density_fraction", o.bulge_density_fraction);
   r.read("min_drivable_share", o.min_drivable_share);
   r.read("weak_density_fraction", o.weak_density_fraction);
@@ -94,6 +96,7 @@ void ExplorerOptions::validate() const {
     if (!ok) throw LanesError(std::string("lane explorer option out of range: ") + what);
   };
   need(num_particles >= 10 && num_particles <= 100000, "num_particles in [10, 100000]");
+  need(pocket_taper_max_m >= 0 && pocket_min_width_m > 0, "pocket_taper_max_m >= 0 and pocket_min_width_m > 0");
   need(footprint_length_m > 0 && footprint_width_m > 0, "footprint > 0");
   need(v_min > 0 && v_max >= v_min, "0 < v_min <= v_max");
   need(w_max >= w_min, "w_min <= w_max");

@@ -95,6 +95,9 @@ struct ExplorerOptions {
   bool lanes_from_osm_way = true;        // ... and when no mapped road runs straight into or out of it,
                                          //   the lanes its own OSM way gives (carried_lanes.h lanesFromOsmWay)
   double split_neighbour_m = 4.5;        // a lane born/ending this close to another splits/merges
+  double pocket_taper_max_m = 40.0;      // a lane split off another (a turn pocket) starts where its
+                                         //   taper does, looked for this far back (0: where it was found)
+  double pocket_min_width_m = 0.6;       // ... where its two lines close in to under this
   double bulge_density_fraction = 0.15;  // a lane that splits off or merges into a lane with fewer
                                          //   particles per metre than this fraction of that lane's
                                          //   is noise beside it, not a lane

@@ -1151,104 +1151,148 @@ void probeBoundaries(const Raster& R, const FrenetFrame& frame, const ExplorerOp
 // Each line is followed as it was last seen (straight on, at its slope over the last metres)
 // where a probe finds nothing or something more than 0.5 m off it (a gap between dashes, a line
 // the segmentation lost); more than 8 m with neither line seen, the inner line crossing to the
-// parent's side, or no closing within pocket_taper_max_m (or before the parent's start): nothing
-// changes, a pocket full width as far back as that is not a taper. Over the taper the centre runs
-// straight from where the lines close to the lane's old start, its bounds on the lines.
-void extendPocketsToTheirTaper(const Raster& R, const FrenetFrame& frame, const ExplorerOptions& o, std::vector<Lane>* lanes) {
-  if (o.pocket_taper_max_m <= 0.0) return;
+// other lane's side, or no closing within pocket_taper_max_m (or past the other lane's end):
+// nothing changes, a pocket full width as far as that is not a taper. Over the taper the centre
+// runs straight from where the lines close to the lane's old start, its bounds on the lines. A
+// lane merging into another (a bay's end, a lane dropped) ends where its taper does, the same way
+// forward from its end.
+
+// Extends `lane` at its start (dir -1, beside `other`, the lane it split off) or its end (dir +1,
+// beside the lane it merges into) to where its taper closes; false when none is found.
+bool extendToTaper(const Raster& R, const FrenetFrame& frame, const ExplorerOptions& o, const Lane& other, int dir, Lane* lane) {
   constexpr double kStep = 0.5, kJump = 0.5, kMaxGap = 8.0, kSlopeOver = 3.0;
-  for (auto& lane : *lanes) {
-    if (lane.split_from < 0 || lane.split_from >= static_cast<int>(lanes->size()) || lane.waypoint_s.size() < 2) continue;
-    const Lane& parent = (*lanes)[lane.split_from];
-    const double s0 = lane.s_begin;
-    const bool left_of_parent = lane.centre.d(s0) > parent.dAt(s0);
-    const double s_min = std::max({parent.s_begin + 1.0, s0 - o.pocket_taper_max_m, R.sOf(R.live_i0)});
-    std::vector<double> ss{s0}, ls{lane.left.d.front()}, rs{lane.right.d.front()};  // walking back
-    // Each line's last sightings (s, d), to follow it across a gap.
-    std::vector<std::pair<double, double>> seen_l{{s0, ls[0]}}, seen_r{{s0, rs[0]}};
-    const auto predict = [&](const std::vector<std::pair<double, double>>& seen, double t) {
-      const auto& last = seen.back();
-      for (auto it = seen.rbegin(); it != seen.rend(); ++it) {
-        if (it->first - last.first >= kSlopeOver) {  // an earlier sighting kSlopeOver on (s runs back)
-          const double slope = (last.second - it->second) / (last.first - it->first);
-          return last.second + slope * (t - last.first);
-        }
-      }
-      return last.second;
-    };
-    bool closed = false;
-    for (double t = s0 - kStep; t >= s_min; t -= kStep) {
-      const double pl = predict(seen_l, t), pr = predict(seen_r, t);
-      const double d = 0.5 * (pl + pr);
-      uint8_t hl = kUnobserved, hr = kUnobserved;
-      const double ml = probeBoundary(R, o, t, d, +1, &hl), mr = probeBoundary(R, o, t, d, -1, &hr);
-      const bool ok_l = hl != kUnobserved && std::abs(ml - pl) <= kJump, ok_r = hr != kUnobserved && std::abs(mr - pr) <= kJump;
-      if (ok_l) seen_l.push_back({t, ml});
-      if (ok_r) seen_r.push_back({t, mr});
-      if (std::min(seen_l.back().first, seen_r.back().first) - t > kMaxGap) break;  // neither line seen for long
-      const double l = ok_l ? ml : pl, r = ok_r ? mr : pr;
-      // The inner line stays beside the parent's centre (a pocket does not cross its parent).
-      if (left_of_parent ? r < parent.dAt(t) + 0.5 : l > parent.dAt(t) - 0.5) break;
-      ss.push_back(t);
-      ls.push_back(l);
-      rs.push_back(r);
-      if (l - r < o.pocket_min_width_m) {
-        closed = true;
-        break;
+  if (lane->waypoint_s.size() < 2) return false;
+  const bool at_start = dir < 0;
+  const double s0 = at_start ? lane->s_begin : lane->s_end;
+  const size_t k0 = at_start ? 0 : lane->waypoint_s.size() - 1;
+  const bool left_of_other = lane->centre.d(s0) > other.dAt(s0);
+  const double live0 = R.sOf(R.live_i0), live1 = R.sOf(R.live_i1);
+  const double limit = at_start ? std::max({other.s_begin + 1.0, s0 - o.pocket_taper_max_m, live0})
+                                : std::min({other.s_end - 1.0, s0 + o.pocket_taper_max_m, live1});
+  // The lines where the lane ends, probed again (its stored bounds there may be its neighbours'
+  // median: rejectBoundaryOutliers).
+  uint8_t h0l = kUnobserved, h0r = kUnobserved;
+  const double d0 = lane->centre.d(s0);
+  const double l0 = probeBoundary(R, o, s0, d0, +1, &h0l), r0 = probeBoundary(R, o, s0, d0, -1, &h0r);
+  std::vector<double> ss{s0}, ls{h0l != kUnobserved ? l0 : lane->left.d[k0]}, rs{h0r != kUnobserved ? r0 : lane->right.d[k0]};
+  // Each line's last sightings (s, d), to follow it across a gap.
+  std::vector<std::pair<double, double>> seen_l{{s0, ls[0]}}, seen_r{{s0, rs[0]}};
+  const auto predict = [&](const std::vector<std::pair<double, double>>& seen, double t) {
+    const auto& last = seen.back();
+    for (auto it = seen.rbegin(); it != seen.rend(); ++it) {
+      if (std::abs(it->first - last.first) >= kSlopeOver) {  // an earlier sighting kSlopeOver away
+        const double slope = (last.second - it->second) / (last.first - it->first);
+        return last.second + slope * (t - last.first);
       }
     }
-    if (!closed || ss.size() < 3) continue;
-    // Forward order (the last sample is the lane's old start).
+    return last.second;
+  };
+  bool closed = false;
+  for (double t = s0 + dir * kStep; at_start ? t >= limit : t <= limit; t += dir * kStep) {
+    const double pl = predict(seen_l, t), pr = predict(seen_r, t);
+    uint8_t hl = kUnobserved, hr = kUnobserved;
+    const double ml = probeBoundary(R, o, t, 0.5 * (pl + pr), +1, &hl), mr = probeBoundary(R, o, t, 0.5 * (pl + pr), -1, &hr);
+    const bool ok_l = hl != kUnobserved && std::abs(ml - pl) <= kJump, ok_r = hr != kUnobserved && std::abs(mr - pr) <= kJump;
+    if (ok_l) seen_l.push_back({t, ml});
+    if (ok_r) seen_r.push_back({t, mr});
+    if (std::min(std::abs(seen_l.back().first - t), std::abs(seen_r.back().first - t)) > kMaxGap) return false;  // neither seen for long
+    const double l = ok_l ? ml : pl, r = ok_r ? mr : pr;
+    // The inner line stays beside the other lane's centre (a pocket does not cross its parent).
+    if (left_of_other ? r < other.dAt(t) + 0.5 : l > other.dAt(t) - 0.5) return false;
+    ss.push_back(t);
+    ls.push_back(l);
+    rs.push_back(r);
+    if (l - r < o.pocket_min_width_m) {
+      closed = true;
+      break;
+    }
+  }
+  if (!closed || ss.size() < 3) return false;
+  if (at_start) {  // in the order of s
     std::reverse(ss.begin(), ss.end());
     std::reverse(ls.begin(), ls.end());
     std::reverse(rs.begin(), rs.end());
-    const double st = ss.front();
-    PiecewiseLinearFit fit;
-    fit.knots = {st, s0};
-    fit.values = {0.5 * (ls.front() + rs.front()), lane.centre.d(s0)};
-    const PiecewiseLinearFit& old = lane.centre.piecewiseLinear();
+  }
+  const double st = at_start ? ss.front() : ss.back();  // where the taper closes
+  const double s_begin = at_start ? st : lane->s_begin, s_end = at_start ? lane->s_end : st;
+  const auto at = [&](const std::vector<double>& v, double s) {  // the walk's samples, interpolated
+    const size_t i = std::clamp<size_t>(std::upper_bound(ss.begin(), ss.end(), s) - ss.begin(), 1, ss.size() - 1);
+    const double u = std::clamp((s - ss[i - 1]) / (ss[i] - ss[i - 1]), 0.0, 1.0);
+    return v[i - 1] + u * (v[i] - v[i - 1]);
+  };
+  const double a = at_start ? st : s0, b = at_start ? s0 : st;  // the taper
+  const int n = std::max(2, static_cast<int>(std::ceil((b - a) / o.waypoint_spacing_m)) + 1);
+  const auto taperS = [&](int k) { return a + (b - a) * k / (n - 1); };
+  // The centre: midway between the lines at each of the taper's way-points (so it stays between
+  // them where they close in), the lane's own fit beyond.
+  PiecewiseLinearFit fit;
+  const PiecewiseLinearFit& old = lane->centre.piecewiseLinear();
+  const auto push = [&](double k, double v) {
+    fit.knots.push_back(k);
+    fit.values.push_back(v);
+  };
+  const auto mid = [&](double x) { return 0.5 * (at(ls, x) + at(rs, x)); };
+  if (at_start) {
+    for (int k = 0; k + 1 < n; ++k) push(taperS(k), mid(taperS(k)));
+    push(s0, lane->centre.d(s0));
     for (size_t k = 0; k < old.knots.size(); ++k) {
-      if (old.knots[k] <= s0 + 0.5) continue;
-      fit.knots.push_back(old.knots[k]);
-      fit.values.push_back(old.values[k]);
+      if (old.knots[k] > s0 + 0.5 && old.knots[k] < lane->s_end - 0.5) push(old.knots[k], old.values[k]);
     }
-    if (fit.knots.back() < lane.s_end - 0.5) {
-      fit.knots.push_back(lane.s_end);
-      fit.values.push_back(lane.centre.d(lane.s_end));
+    push(lane->s_end, lane->centre.d(lane->s_end));
+  } else {
+    push(lane->s_begin, lane->centre.d(lane->s_begin));
+    for (size_t k = 0; k < old.knots.size(); ++k) {
+      if (old.knots[k] > lane->s_begin + 0.5 && old.knots[k] < s0 - 0.5) push(old.knots[k], old.values[k]);
     }
-    const auto at = [&](const std::vector<double>& v, double s) {  // the walk's samples, interpolated
-      const size_t i = std::clamp<size_t>(std::upper_bound(ss.begin(), ss.end(), s) - ss.begin(), 1, ss.size() - 1);
-      const double u = std::clamp((s - ss[i - 1]) / (ss[i] - ss[i - 1]), 0.0, 1.0);
-      return v[i - 1] + u * (v[i] - v[i - 1]);
-    };
-    Lane out = lane;
-    out.centre = CentreLine(fit, st, lane.s_end);
-    out.s_begin = st;
-    out.waypoint_s.clear();
-    out.waypoints.clear();
-    out.left.d.clear();
-    out.left.points.clear();
-    out.right.d.clear();
-    out.right.points.clear();
-    const int n = std::max(2, static_cast<int>(std::ceil((s0 - st) / o.waypoint_spacing_m)) + 1);
-    for (int k = 0; k + 1 < n; ++k) {  // the taper's way-points; the lane's own follow from s0
-      const double s = st + (s0 - st) * k / (n - 1);
+    push(s0, lane->centre.d(s0));
+    for (int k = 1; k < n; ++k) push(taperS(k), mid(taperS(k)));
+  }
+  Lane out = *lane;
+  out.centre = CentreLine(fit, s_begin, s_end);
+  out.s_begin = s_begin;
+  out.s_end = s_end;
+  out.waypoint_s.clear();
+  out.waypoints.clear();
+  out.left.d.clear();
+  out.left.points.clear();
+  out.right.d.clear();
+  out.right.points.clear();
+  const auto taper = [&](bool skip_first, bool skip_last) {
+    for (int k = skip_first ? 1 : 0; k < (skip_last ? n - 1 : n); ++k) {
+      const double s = taperS(k);
       out.waypoint_s.push_back(s);
       out.left.d.push_back(at(ls, s));
       out.right.d.push_back(at(rs, s));
     }
-    for (size_t k = 0; k < lane.waypoint_s.size(); ++k) {
-      out.waypoint_s.push_back(lane.waypoint_s[k]);
-      out.left.d.push_back(lane.left.d[k]);
-      out.right.d.push_back(lane.right.d[k]);
+  };
+  if (at_start) taper(false, true);  // the lane's own way-points follow from s0
+  for (size_t k = 0; k < lane->waypoint_s.size(); ++k) {
+    out.waypoint_s.push_back(lane->waypoint_s[k]);
+    out.left.d.push_back(lane->left.d[k]);
+    out.right.d.push_back(lane->right.d[k]);
+  }
+  if (!at_start) taper(true, false);
+  for (size_t k = 0; k < out.waypoint_s.size(); ++k) {
+    const double s = out.waypoint_s[k];
+    out.waypoints.push_back(frame.toEnu(s, out.centre.d(s)));
+    out.left.points.push_back(frame.toEnu(s, out.left.d[k]));
+    out.right.points.push_back(frame.toEnu(s, out.right.d[k]));
+  }
+  *lane = std::move(out);
+  return true;
+}
+
+void extendPocketsToTheirTaper(const Raster& R, const FrenetFrame& frame, const ExplorerOptions& o, std::vector<Lane>* lanes) {
+  if (o.pocket_taper_max_m <= 0.0) return;
+  const int n = static_cast<int>(lanes->size());
+  for (int i = 0; i < n; ++i) {
+    Lane& lane = (*lanes)[i];
+    if (lane.split_from >= 0 && lane.split_from < n && lane.split_from != i) {
+      extendToTaper(R, frame, o, (*lanes)[lane.split_from], -1, &lane);
     }
-    for (size_t k = 0; k < out.waypoint_s.size(); ++k) {
-      const double s = out.waypoint_s[k];
-      out.waypoints.push_back(frame.toEnu(s, out.centre.d(s)));
-      out.left.points.push_back(frame.toEnu(s, out.left.d[k]));
-      out.right.points.push_back(frame.toEnu(s, out.right.d[k]));
+    if (lane.merges_into >= 0 && lane.merges_into < n && lane.merges_into != i) {
+      extendToTaper(R, frame, o, (*lanes)[lane.merges_into], +1, &lane);
     }
-    lane = std::move(out);
   }
 }
 

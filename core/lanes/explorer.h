@@ -45,7 +45,8 @@
 //    way-points where both were found, at most recentre_max_m (recentreOnBounds): the particles'
 //    mean lies midway between the lines' near edges, off by up to a fifth of a metre beside a
 //    double line or a kerb. A lane split off another (a turn pocket) then starts where its taper
-//    does, not where a footprint first fitted beside its parent (extendPocketsToTheirTaper).
+//    does, not where a footprint first fitted beside its parent, and a lane merging into another
+//    ends where its taper closes (extendPocketsToTheirTaper).
 #pragma once
 
 #include "core/bev/bev_grid.h"

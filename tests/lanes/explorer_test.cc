@@ -226,6 +226,20 @@ TEST(Explorer, BusBay) {
   EXPECT_EQ(rep.result.laneCountAt(50.0), 2);
   EXPECT_EQ(rep.result.laneCountAt(105.0), 3);
   EXPECT_EQ(rep.result.laneCountAt(170.0), 2);
+  // The bay splits off at its first taper and merges back at its second: it runs from where the
+  // taper opens to 0.6 m (pocket_min_width_m, 2 m into it) to where the second closes to 0.6 m
+  // (extendPocketsToTheirTaper; where a footprint fits, 86.1 to 123.6 m).
+  bool bay = false;
+  for (const Lane& l : rep.result.lanes) {
+    if (l.split_from < 0) continue;
+    bay = true;
+    EXPECT_GE(l.merges_into, 0);
+    EXPECT_GT(l.s_begin, 80.0);
+    EXPECT_LT(l.s_begin, 84.0);
+    EXPECT_GT(l.s_end, 126.0);
+    EXPECT_LT(l.s_end, 130.0);
+  }
+  EXPECT_TRUE(bay);
 }
 
 // Issue 16, the benchmark's I-5 case: the kerb-side lane of a wide road is seen with stray line
@@ -247,6 +261,7 @@ TEST(Explorer, ALaneSeenInPiecesIsOneLane) {
   EXPECT_EQ(rep.result.laneCountAt(120.0), 3) << "the lane runs on where it was lost";
   ExplorerOptions off;
   off.join_gap_max_m = 0.0;
+  off.pocket_taper_max_m = 0.0;  // the pieces as found (walked back along lines in the noise, they grow)
   const Report pieces = run(sc, 1, off);
   EXPECT_EQ(pieces.result.lanes.size(), 5u) << "without joining: the right lane in three pieces";
   EXPECT_EQ(pieces.result.laneCountAt(120.0), 2);
@@ -592,6 +607,7 @@ TEST(Explorer, NoLanesOfSpeckledGround) {
   off.bulge_density_fraction = 0.0;
   off.floating_lane_max_m = 0.0;  // which drops such pieces too, on the side away from the kerb
   off.join_gap_max_m = 0.0;       // (joined, the pieces are one lane too thin to keep: weak_density_fraction)
+  off.pocket_taper_max_m = 0.0;   // the pieces as found (walked back along lines in the noise, they grow)
   const Report without = run(sc, 1, off);
   EXPECT_GE(without.result.lanes.size(), 4u) << "without the rule the pieces are lanes";
   for (const Lane& l : without.result.lanes) {

@@ -327,7 +327,7 @@ class OfflineMapper {
   // pose at all, or none within kNearRoadM of a road (a drive of another area, or the wrong --osm).
   std::optional<std::string> offTheNetwork() const {
     if (reach_.poses == 0) return "the log holds no usable " + std::string(channels::kPose) + " message (the car's position)";
-    if (reach_.near_roads > 0) return std::nullopt;
+    if (reach_.near_road) return std::nullopt;
     char where[96];
     if (reach_.nearest_box_m > 0.0) {
       std::snprintf(where, sizeof where, "the nearest is %.1f km from the area its roads cover", reach_.nearest_box_m / 1000.0);
@@ -377,11 +377,9 @@ class OfflineMapper {
     if (p.position.allFinite()) {
       last_position_ = p.position.head<2>();
       ++reach_.poses;
-      const double from_box = network_box_.exteriorDistance(*last_position_);
-      if (from_box <= kNearRoadM && !sk_.nearestRoads(*last_position_, kNearRoadM).empty()) {
-        ++reach_.near_roads;
-        reach_.nearest_box_m = 0.0;
-      } else {
+      if (!reach_.near_road) {  // one pose near a road is enough: no query per pose after it
+        const double from_box = network_box_.exteriorDistance(*last_position_);
+        reach_.near_road = from_box <= kNearRoadM && !sk_.nearestRoads(*last_position_, kNearRoadM).empty();
         reach_.nearest_box_m = std::min(reach_.nearest_box_m, from_box);
       }
     }
@@ -583,7 +581,8 @@ class OfflineMapper {
   // Whether this drive came near the OSM data's roads at all (offTheNetwork).
   static constexpr double kNearRoadM = 50.0;
   struct DriveReach {
-    int64_t poses = 0, near_roads = 0;
+    int64_t poses = 0;
+    bool near_road = false;  // a pose came within kNearRoadM of a road
     double nearest_box_m = std::numeric_limits<double>::infinity();  // of the poses, from network_box_
   };
   DriveReach reach_;

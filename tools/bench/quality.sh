@@ -24,7 +24,8 @@
 #   LANES_CONFIG=FILE, TAG=NAME   judge a change to the mapping stages: map the kept projections
 #                     with this lane mapper config (default: the shipped one) into map-LABEL-NAME
 #                     (eval-LABEL-NAME.json), and end with a table of the networks whose figures
-#                     differ from the untagged run's on the same OUT_DIR (quality_table.py --compare)
+#                     differ from the untagged run's on the same OUT_DIR (quality_table.py --compare;
+#                     that run's tables are printed too, and quality.json holds both)
 # Drives already simulated in OUT_DIR are reused, and so are their projections (neither depends on
 # the mapping stages: after a change there, run again on the same OUT_DIR); the maps and scores are
 # always made anew.
@@ -122,14 +123,15 @@ echo "   wall $(( $(date +%s) - t0 )) s"
 if [ -z "$tag" ]; then
   python3 "$root/tools/bench/quality_table.py" "$out" $labels --trained-on "${TRAINED_ON:-monaco}"
 else
-  # The tagged maps' tables, then each beside the untagged run's on the same drives, where there is one.
-  tagged=""
-  for lab in $labels; do tagged+=" $lab$tag"; done
-  python3 "$root/tools/bench/quality_table.py" "$out" $tagged --trained-on "${TRAINED_ON:-monaco}"
+  # The tagged maps' tables (and the untagged run's on the same drives, where there is one), then
+  # each tagged label beside its untagged one; one table run, so quality.json holds them all.
+  table_labels="" compare=()
   for lab in $labels; do
     if ls "$out"/*/eval-"$lab".json > /dev/null 2>&1; then
-      python3 "$root/tools/bench/quality_table.py" "$out" "$lab" "$lab$tag" --trained-on "${TRAINED_ON:-monaco}" --compare "$lab" "$lab$tag" |
-        sed -n '/^== .* -> /,$p'
+      table_labels+=" $lab"
+      compare+=(--compare "$lab" "$lab$tag")
     fi
+    table_labels+=" $lab$tag"
   done
+  python3 "$root/tools/bench/quality_table.py" "$out" $table_labels --trained-on "${TRAINED_ON:-monaco}" "${compare[@]}"
 fi

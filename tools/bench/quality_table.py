@@ -21,12 +21,12 @@ whether the model saw them. (The shipped model's Monaco frames came from seeds 1
 benchmark's seeds among them; train.sh's RECIPE=many renders seeds 201 and up.)
 
 With --compare A B (two of the labels: a map before and after a change, e.g. quality.sh's
-"model" and "model-TAG"), a last table lists each network whose figures differ between A and B,
+"model" and "model-TAG"; given once per pair), a last table lists each network whose figures differ between A and B,
 A's row above B's, then both pooled rows and the networks beating the paper under each: what a
 change to the mapping stages did, network by network (judge it on the pooled rows and on every
 network it made worse).
 
-Usage: quality_table.py OUT_DIR LABEL [LABEL ...] [--trained-on NET,NET,...] [--compare A B]
+Usage: quality_table.py OUT_DIR LABEL [LABEL ...] [--trained-on NET,NET,...] [--compare A B ...]
        (also writes OUT_DIR/quality.json)
 """
 import json
@@ -132,15 +132,16 @@ def trained_networks(argv):
 
 
 def compare_labels(argv):
-    """--compare A B (removed from argv): the two labels to compare, or None."""
-    if "--compare" not in argv:
-        return None
-    i = argv.index("--compare")
-    pair = argv[i + 1:i + 3]
-    del argv[i:i + 3]
-    if len(pair) != 2:
-        sys.exit("quality_table.py: --compare needs two labels")
-    return pair
+    """Every --compare A B (removed from argv): the pairs of labels to compare."""
+    pairs = []
+    while "--compare" in argv:
+        i = argv.index("--compare")
+        pair = argv[i + 1:i + 3]
+        del argv[i:i + 3]
+        if len(pair) != 2:
+            sys.exit("quality_table.py: --compare needs two labels")
+        pairs.append(pair)
+    return pairs
 
 
 def row(name, c):
@@ -224,8 +225,8 @@ def main():
         beat = [n for n, c in per_net.items() if beats_paper(c)]
         print(f"   networks that beat the paper on lane P/R and junction P/R: {len(beat)} of {len(per_net)}")
         print(misses_line(total_misses))
-    if compare:
-        print_comparison(result, *compare)
+    for pair in compare:
+        print_comparison(result, *pair)
     clean = lambda v: {k: clean(x) for k, x in v.items()} if isinstance(v, dict) else (
         None if isinstance(v, float) and math.isnan(v) else v)
     with open(os.path.join(out, "quality.json"), "w") as f:

@@ -1143,7 +1143,6 @@ void probeBoundaries(const Raster& R, const FrenetFrame& frame, const ExplorerOp
   }
 }
 
-// Index from the left among the lanes present at each lane's middle.
 // A lane split off another (a turn pocket, a bay) is found where a car's footprint fits beside
 // its parent, metres after its taper began; its lanelet starts where the taper does. From the
 // lane's start, walk back (0.5 m steps) along the two lines that bound it, probed each step from
@@ -1153,8 +1152,8 @@ void probeBoundaries(const Raster& R, const FrenetFrame& frame, const ExplorerOp
 // the segmentation lost); more than 8 m with neither line seen, the inner line crossing to the
 // other lane's side, or no closing within pocket_taper_max_m (or past the other lane's end):
 // nothing changes, a pocket full width as far as that is not a taper. Over the taper the centre
-// runs straight from where the lines close to the lane's old start, its bounds on the lines. A
-// lane merging into another (a bay's end, a lane dropped) ends where its taper does, the same way
+// runs midway between the lines at each way-point, its bounds on the lines. A lane merging into
+// another (a bay's end, a lane dropped) ends where its taper does, the same way
 // forward from its end.
 
 // Extends `lane` at its start (dir -1, beside `other`, the lane it split off) or its end (dir +1,
@@ -1220,9 +1219,11 @@ bool extendToTaper(const Raster& R, const FrenetFrame& frame, const ExplorerOpti
     const double u = std::clamp((s - ss[i - 1]) / (ss[i] - ss[i - 1]), 0.0, 1.0);
     return v[i - 1] + u * (v[i] - v[i - 1]);
   };
-  const double a = at_start ? st : s0, b = at_start ? s0 : st;  // the taper
+  // The taper's way-points, in the order of s, but the one at s0 (the lane's own).
+  const double a = at_start ? st : s0, b = at_start ? s0 : st;
   const int n = std::max(2, static_cast<int>(std::ceil((b - a) / o.waypoint_spacing_m)) + 1);
-  const auto taperS = [&](int k) { return a + (b - a) * k / (n - 1); };
+  std::vector<double> taper_s;
+  for (int k = at_start ? 0 : 1; k < (at_start ? n - 1 : n); ++k) taper_s.push_back(a + (b - a) * k / (n - 1));
   // The centre: midway between the lines at each of the taper's way-points (so it stays between
   // them where they close in), the lane's own fit beyond.
   PiecewiseLinearFit fit;
@@ -1233,7 +1234,7 @@ bool extendToTaper(const Raster& R, const FrenetFrame& frame, const ExplorerOpti
   };
   const auto mid = [&](double x) { return 0.5 * (at(ls, x) + at(rs, x)); };
   if (at_start) {
-    for (int k = 0; k + 1 < n; ++k) push(taperS(k), mid(taperS(k)));
+    for (double x : taper_s) push(x, mid(x));
     push(s0, lane->centre.d(s0));
     for (size_t k = 0; k < old.knots.size(); ++k) {
       if (old.knots[k] > s0 + 0.5 && old.knots[k] < lane->s_end - 0.5) push(old.knots[k], old.values[k]);
@@ -1245,7 +1246,7 @@ bool extendToTaper(const Raster& R, const FrenetFrame& frame, const ExplorerOpti
       if (old.knots[k] > lane->s_begin + 0.5 && old.knots[k] < s0 - 0.5) push(old.knots[k], old.values[k]);
     }
     push(s0, lane->centre.d(s0));
-    for (int k = 1; k < n; ++k) push(taperS(k), mid(taperS(k)));
+    for (double x : taper_s) push(x, mid(x));
   }
   Lane out = *lane;
   out.centre = CentreLine(fit, s_begin, s_end);
@@ -1257,21 +1258,20 @@ bool extendToTaper(const Raster& R, const FrenetFrame& frame, const ExplorerOpti
   out.left.points.clear();
   out.right.d.clear();
   out.right.points.clear();
-  const auto taper = [&](bool skip_first, bool skip_last) {
-    for (int k = skip_first ? 1 : 0; k < (skip_last ? n - 1 : n); ++k) {
-      const double s = taperS(k);
-      out.waypoint_s.push_back(s);
-      out.left.d.push_back(at(ls, s));
-      out.right.d.push_back(at(rs, s));
+  const auto taper = [&] {
+    for (double x : taper_s) {
+      out.waypoint_s.push_back(x);
+      out.left.d.push_back(at(ls, x));
+      out.right.d.push_back(at(rs, x));
     }
   };
-  if (at_start) taper(false, true);  // the lane's own way-points follow from s0
+  if (at_start) taper();  // before the lane's own way-points, which begin at s0
   for (size_t k = 0; k < lane->waypoint_s.size(); ++k) {
     out.waypoint_s.push_back(lane->waypoint_s[k]);
     out.left.d.push_back(lane->left.d[k]);
     out.right.d.push_back(lane->right.d[k]);
   }
-  if (!at_start) taper(true, false);
+  if (!at_start) taper();  // after them, which end at s0
   for (size_t k = 0; k < out.waypoint_s.size(); ++k) {
     const double s = out.waypoint_s[k];
     out.waypoints.push_back(frame.toEnu(s, out.centre.d(s)));
@@ -1296,6 +1296,7 @@ void extendPocketsToTheirTaper(const Raster& R, const FrenetFrame& frame, const 
   }
 }
 
+// Index from the left among the lanes present at each lane's middle.
 void indexLanesFromLeft(std::vector<Lane>* lanes) {
   for (auto& lane : *lanes) {
     const double sm = 0.5 * (lane.s_begin + lane.s_end);

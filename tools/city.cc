@@ -2,7 +2,8 @@
 //
 //   lanemap-city --store S --osm city.osm [--jobs N] [--oracle | --semantic-channel C | --model M]
 //                [--no-lidar] [--no-align | --no-drive-offsets] DRIVE.lcmlog...
-//   lanemap-city --store S --osm city.osm --slurm [--slurm-dry-run] DRIVE.lcmlog...
+//   lanemap-city --store S --osm city.osm --slurm [--slurm-dry-run] [--shards N] DRIVE.lcmlog...
+//   lanemap-city --store S --osm city.osm --shards N DRIVE.lcmlog...   (the fusion in N shards of roads)
 //
 // Two stages over lanemap-offline; with --no-drive-offsets a city's map is the map
 // `lanemap-offline --log A --log B ...` makes of the same drives in the same order, byte for byte
@@ -22,8 +23,19 @@
 // when whole; the map into map.partial and swapped in: an interrupted run leaves the store as it
 // was before it, plus the projections that finished.
 //
+// --shards N fuses in N shards of roads: a road's evidence is fused from its own traversals only
+// and explored on its own, so each shard (the roads whose id is K modulo N) is fused and explored
+// apart (lanemap-offline --shard K/N, N at once on the cores here, or a Slurm array), after the
+// drives' offsets were solved once (--offsets-out); then one assembly (lanemap-offline --assemble)
+// gives the short roads left with no lane their neighbours' lanes, builds the junctions and writes
+// the map: the map one fusion process makes, byte for byte, whatever N (tested), its summary's
+// roads in road order. S/fusion holds the steps' work (plan.json, offsets.json, shard-K) until
+// the map is in place. `--fuse-step prepare|shard|assemble` runs one step (what the Slurm jobs run).
+//
 // --slurm writes S/slurm/project.sbatch (an array job, one task per new drive) and fuse.sbatch
-// (one task, after the array has succeeded: --dependency=afterok) and submits them with sbatch;
+// (one task, after the array has succeeded: --dependency=afterok), or with --shards N
+// fuse-prepare.sbatch, fuse-shards.sbatch (an array of N) and fuse-assemble.sbatch, each after
+// the one before has succeeded, and submits them with sbatch;
 // the store, the logs, the OSM file and lanemap's programs must be at the same paths on every
 // node (a shared filesystem); a partition or account comes from sbatch's environment
 // (SBATCH_PARTITION, SBATCH_ACCOUNT). --slurm-dry-run writes them without submitting.
@@ -60,6 +72,9 @@ struct Options {
   std::string store, osm, semantic_channel, model;
   std::vector<std::string> drives;
   int jobs = 0;  // 0: every core
+  int shards = 0;  // > 0: the fusion in that many shards of roads, then an assembly (0: one process)
+  std::string fuse_step;  // a sharded fusion's step on its own (Slurm's jobs): prepare, shard, assemble
+  int shard_index = -1;   // --fuse-step shard: which (else SLURM_ARRAY_TASK_ID)
   bool oracle = false, no_lidar = false, no_align = false, drive_offsets = false, no_drive_offsets = false, slurm = false,
        slurm_dry_run = false;
 };
@@ -133,6 +148,14 @@ std::string join(const std::vector<std::string>& args) {
   return s;
 }
 
+// Runs args with their output in `log`; the exit code (-1: could not start).
+int runLogged(const std::vector<std::string>& args, const std::string& log) {
+  const pid_t pid = lanemap::spawnLogged(args, log);
+  int status = 0;
+  if (pid < 0 || waitpid(pid, &status, 0) < 0) return -1;
+  return lanemap::exitCode(status);
+}
+
 // Holds S/.lock (flock) for the run: a second run on the store stops with the first one's pid.
 class StoreLock {
  public:
@@ -158,6 +181,109 @@ class StoreLock {
   int fd_ = -1;
 };
 
+// A fusion in shards of roads (--shards N): S/fusion/ holds the plan (plan.json: the projections
+// and how to fuse them, fixed when it was prepared), the drives' offsets (offsets.json), and each
+// shard's roads (shard-K, from shard-K.partial when whole); the assembly builds the map from every
+// shard into map.partial, swaps it in and removes S/fusion. Steps: prepare (once), shard K (N of
+// them, at once: on the cores here, or as a Slurm array), assemble (once).
+class ShardedFusion {
+ public:
+  ShardedFusion(fs::path store, fs::path offline, std::string osm, std::vector<std::string> labels)
+      : store_(std::move(store)), offline_(std::move(offline)), osm_(std::move(osm)), labels_(std::move(labels)) {}
+
+  fs::path dir() const { return store_ / "fusion"; }
+
+  // The plan, and the drives' offsets solved over all of them (when `offsets`).
+  void prepare(const std::vector<fs::path>& all, int shards, bool offsets, bool no_align) {
+    fs::remove_all(dir());
+    fs::create_directories(dir());
+    nlohmann::json plan = {{"shards", shards}, {"offsets", offsets}, {"no_align", no_align}, {"projections", nlohmann::json::array()}};
+    for (const auto& p : all) plan["projections"].push_back(p.string());
+    std::ofstream(dir() / "plan.json.tmp") << plan.dump(1) << "\n";
+    fs::rename(dir() / "plan.json.tmp", dir() / "plan.json");
+    if (!offsets) return;
+    auto a = base(plan);
+    a.insert(a.end(), {"--drive-offsets", "--offsets-out", (dir() / "offsets.json").string()});
+    const std::string log = (dir() / "prepare.log").string();
+    if (runLogged(a, log) != 0) throw std::runtime_error("solving the drives' offsets failed:\n" + tail(log));
+  }
+
+  nlohmann::json plan() const {
+    std::ifstream in(dir() / "plan.json");
+    const nlohmann::json p = nlohmann::json::parse(in, nullptr, false);
+    if (p.is_discarded() || !p.contains("shards")) {
+      throw std::runtime_error("no sharded fusion is prepared in " + dir().string() + " (its first step, --fuse-step prepare, has not run)");
+    }
+    return p;
+  }
+
+  // Shard k's command (into shard-K.partial) and its log.
+  std::vector<std::string> shardArgs(const nlohmann::json& plan, int k) const {
+    auto a = base(plan);
+    a.insert(a.end(), {"--shard", std::to_string(k) + "/" + std::to_string(plan.at("shards").get<int>()), "--out", partial(k).string()});
+    return a;
+  }
+  fs::path partial(int k) const { return dir() / ("shard-" + std::to_string(k) + ".partial"); }
+  fs::path whole(int k) const { return dir() / ("shard-" + std::to_string(k)); }
+  std::string log(int k) const { return (dir() / ("shard-" + std::to_string(k) + ".log")).string(); }
+  // After shard k's command: whole (renamed into place), or the error.
+  void finishShard(int k, int exit_code) const {
+    if (exit_code != 0) {
+      fs::remove_all(partial(k));
+      throw std::runtime_error("shard " + std::to_string(k) + " failed (exit " + std::to_string(exit_code) + "):\n" + tail(log(k)));
+    }
+    fs::remove_all(whole(k));
+    fs::rename(partial(k), whole(k));
+  }
+  void runShard(int k) const {
+    const auto p = plan();
+    if (k < 0 || k >= p.at("shards").get<int>()) {
+      throw std::runtime_error("no shard " + std::to_string(k) + ": the fusion is prepared in " + std::to_string(p.at("shards").get<int>()) + " shards");
+    }
+    fs::remove_all(partial(k));
+    finishShard(k, runLogged(shardArgs(p, k), log(k)));
+  }
+
+  // Every shard into S/map (through map.partial); S/fusion removed after.
+  void assemble() const {
+    const auto p = plan();
+    auto a = base(p);
+    for (int k = 0; k < p.at("shards").get<int>(); ++k) {
+      if (!fs::exists(whole(k))) throw std::runtime_error("shard " + std::to_string(k) + " has not finished (" + whole(k).string() + "): the map is as it was");
+      a.insert(a.end(), {"--assemble", whole(k).string()});
+    }
+    const fs::path map_dir = store_ / "map", partial_map = store_ / "map.partial", old = store_ / "map.old";
+    fs::remove_all(partial_map);
+    a.insert(a.end(), {"--out", partial_map.string()});
+    const std::string log = (dir() / "assemble.log").string();
+    if (runLogged(a, log) != 0) {
+      fs::remove_all(partial_map);
+      throw std::runtime_error("the assembly failed (the map of the store is as it was):\n" + tail(log));
+    }
+    fs::remove_all(old);
+    if (fs::exists(map_dir)) fs::rename(map_dir, old);
+    fs::rename(partial_map, map_dir);
+    fs::remove_all(old);
+    fs::remove_all(dir());
+  }
+
+ private:
+  // lanemap-offline over the plan's projections, as the plan says to fuse them.
+  std::vector<std::string> base(const nlohmann::json& plan) const {
+    std::vector<std::string> a{offline_.string(), "-q", "--osm", osm_};
+    for (const auto& p : plan.at("projections")) a.insert(a.end(), {"--traversals", p.get<std::string>()});
+    a.insert(a.end(), labels_.begin(), labels_.end());
+    if (plan.at("no_align").get<bool>()) a.push_back("--no-align");
+    if (plan.at("offsets").get<bool>() && fs::exists(dir() / "offsets.json")) {
+      a.insert(a.end(), {"--offsets-in", (dir() / "offsets.json").string()});
+    }
+    return a;
+  }
+  fs::path store_, offline_;
+  std::string osm_;
+  std::vector<std::string> labels_;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -166,7 +292,8 @@ int main(int argc, char** argv) {
                "projected once (lanemap-offline --project-only, N at once), then every drive of the store is fused\n"
                "into one map (lanemap-offline --traversals, the store's order), after solving each drive's own pose\n"
                "offset over the roads drives share (--drive-offsets; with --no-drive-offsets: the map --log A --log B\n"
-               "... makes)."};
+               "... makes). --shards N fuses in N shards of roads (here or as Slurm array tasks), then assembles the\n"
+               "map: the same map."};
   app.add_option("--store", o.store, "the map store (a folder, created): projections/, map/ (map.osm, map.geojson, ...)")->required();
   app.add_option("--osm", o.osm, "road-level OSM file of the city (.osm or .osm.pbf)")->required()->check(CLI::ExistingFile);
   app.add_option("drives", o.drives, "drive logs (drive.lcmlog, or a folder holding one), added to the store in this order");
@@ -185,6 +312,15 @@ int main(int argc, char** argv) {
                "--drive-offsets; the default, unless --no-align)")
       ->excludes(no_align)
       ->excludes(no_offsets);
+  auto* shards = app.add_option("--shards", o.shards,
+                 "fuse in N shards of roads (each shard's roads aligned, fused and explored apart, N at a time here or as\n"
+                 "a Slurm array), then assemble the map: the same map as one process, whatever N")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--fuse-step", o.fuse_step,
+                 "run one step of a sharded fusion of the store's drives and stop (what --slurm's jobs run): prepare\n"
+                 "(needs --shards), shard (--shard-index, else SLURM_ARRAY_TASK_ID), assemble")
+      ->check(CLI::IsMember({"prepare", "shard", "assemble"}));
+  app.add_option("--shard-index", o.shard_index, "--fuse-step shard: the shard to fuse (0 .. N-1)")->check(lanemap::cli::kNonNegative);
   auto* slurm = app.add_flag("--slurm", o.slurm, "write the jobs for Slurm (S/slurm/*.sbatch) and submit them with sbatch");
   app.add_flag("--slurm-dry-run", o.slurm_dry_run, "with --slurm: write the job scripts, do not submit")->needs(slurm);
   CLI11_PARSE(app, argc, argv);
@@ -193,11 +329,39 @@ int main(int argc, char** argv) {
     const auto t0 = Clock::now();
     const fs::path store = fs::absolute(o.store);
     fs::create_directories(store / "projections");
-    StoreLock lock(store);
     const fs::path offline = lanemap::executableDir() / "lanemap-offline";
     const fs::path self = lanemap::executableDir() / "lanemap-city";
     const std::string osm = fs::absolute(o.osm).string();
     if (!o.model.empty() && fs::exists(o.model)) o.model = fs::absolute(o.model).string();  // jobs may run elsewhere
+    const auto labels = labelArgs(o);
+    // Each drive's own offset, solved over the roads drives share (core/bev/drive_offsets.h): on
+    // unless asked not to, or unless the drives are fused unaligned.
+    const bool offsets = !o.no_drive_offsets && !o.no_align;
+    ShardedFusion sharded(store, offline, osm, labels);
+    if (!o.fuse_step.empty()) {  // one step of a sharded fusion (a Slurm job's)
+      if (!o.drives.empty()) throw std::runtime_error("--fuse-step fuses the store's drives: give no drive logs");
+      if (o.fuse_step == "shard") {  // shards run at once: no lock (each writes its own folder)
+        int k = o.shard_index;
+        if (k < 0 && std::getenv("SLURM_ARRAY_TASK_ID")) k = std::atoi(std::getenv("SLURM_ARRAY_TASK_ID"));
+        if (k < 0) throw std::runtime_error("--fuse-step shard: which shard? give --shard-index (or run it as a Slurm array task)");
+        sharded.runShard(k);
+        std::printf("lanemap-city: shard %d fused into %s\n", k, sharded.whole(k).c_str());
+        return 0;
+      }
+      StoreLock lock(store);
+      if (o.fuse_step == "prepare") {
+        if (o.shards < 1) throw std::runtime_error("--fuse-step prepare: give --shards N");
+        const auto all = projections(store);
+        if (all.empty()) throw std::runtime_error("the store has no projected drive to fuse");
+        sharded.prepare(all, o.shards, offsets, o.no_align);
+        std::printf("lanemap-city: a fusion of %zu drives in %d shards prepared in %s\n", all.size(), o.shards, sharded.dir().c_str());
+      } else {
+        sharded.assemble();
+        std::printf("lanemap-city: the shards assembled into %s\n", (store / "map").c_str());
+      }
+      return 0;
+    }
+    StoreLock lock(store);
 
     // The drives not in the store yet (by absolute path and size), each with its new slot.
     std::vector<fs::path> have = projections(store);
@@ -220,10 +384,6 @@ int main(int argc, char** argv) {
       todo.emplace_back(log.string(), known[key]);
     }
     if (have.empty() && todo.empty()) throw std::runtime_error("no drive: give drive logs (the store has none yet)");
-    const auto labels = labelArgs(o);
-    // Each drive's own offset, solved over the roads drives share (core/bev/drive_offsets.h): on
-    // unless asked not to, or unless the drives are fused unaligned.
-    const bool offsets = !o.no_drive_offsets && !o.no_align;
     auto projectArgs = [&](const std::string& log, const std::string& folder) {
       std::vector<std::string> a{offline.string(), "-q", "--osm", osm, "--log", log, "--project-only", folder};
       a.insert(a.end(), labels.begin(), labels.end());
@@ -256,14 +416,30 @@ int main(int argc, char** argv) {
       }
       p << "  *) echo \"no drive for task $SLURM_ARRAY_TASK_ID\" >&2; exit 2 ;;\nesac\n";
       p.close();
-      std::ofstream f(dir / "fuse.sbatch");
-      f << "#!/bin/bash\n#SBATCH --job-name=lanemap-fuse\n#SBATCH --output=" << (dir / "fuse.log").string() << "\n"
-        << "#SBATCH --cpus-per-task=2\nset -euo pipefail\n"
-        << join({self.string(), "--store", store.string(), "--osm", osm}) << (labels.empty() ? "" : " " + join(labels))
-        << (o.no_align ? " --no-align" : "") << (o.no_drive_offsets ? " --no-drive-offsets" : "") << "\n";
-      f.close();
-      std::printf("lanemap-city: wrote %s (%zu drive%s) and %s\n", (dir / "project.sbatch").c_str(), todo.size(),
-                  todo.size() == 1 ? "" : "s", (dir / "fuse.sbatch").c_str());
+      // The fusion: one job (fuse.sbatch), or with --shards N a chain: fuse-prepare.sbatch (the
+      // plan and the drives' offsets), fuse-shards.sbatch (an array, one task per shard), then
+      // fuse-assemble.sbatch, each after the one before has succeeded.
+      const std::string city = join({self.string(), "--store", store.string(), "--osm", osm}) + (labels.empty() ? "" : " " + join(labels)) +
+                               (o.no_align ? " --no-align" : "") + (o.no_drive_offsets ? " --no-drive-offsets" : "");
+      auto script = [&](const std::string& name, const std::string& array, const std::string& command) {
+        std::ofstream f(dir / (name + ".sbatch"));
+        f << "#!/bin/bash\n#SBATCH --job-name=lanemap-" << name << "\n#SBATCH --output="
+          << (dir / (name + (array.empty() ? ".log" : "-%a.log"))).string() << "\n#SBATCH --cpus-per-task=2\n"
+          << (array.empty() ? "" : "#SBATCH --array=" + array + "\n") << "set -euo pipefail\n" << command << "\n";
+      };
+      std::vector<std::string> fusion_jobs;
+      if (o.shards > 0) {
+        script("fuse-prepare", "", city + " --shards " + std::to_string(o.shards) + " --fuse-step prepare");
+        script("fuse-shards", "0-" + std::to_string(o.shards - 1), city + " --fuse-step shard");
+        script("fuse-assemble", "", city + " --fuse-step assemble");
+        fusion_jobs = {"fuse-prepare", "fuse-shards", "fuse-assemble"};
+      } else {
+        script("fuse", "", city);
+        fusion_jobs = {"fuse"};
+      }
+      std::printf("lanemap-city: wrote %s (%zu drive%s)", (dir / "project.sbatch").c_str(), todo.size(), todo.size() == 1 ? "" : "s");
+      for (const auto& j : fusion_jobs) std::printf(" and %s", (dir / (j + ".sbatch")).c_str());
+      std::printf("\n");
       if (o.slurm_dry_run) return 0;
       std::string dependency;
       if (!todo.empty()) {
@@ -277,8 +453,17 @@ int main(int argc, char** argv) {
         dependency = "--dependency=afterok:" + id + " ";
         std::printf("lanemap-city: projection array job %s\n", id.c_str());
       }
-      if (std::system(("sbatch " + dependency + quote((dir / "fuse.sbatch").string())).c_str()) != 0) {
-        throw std::runtime_error("sbatch could not submit " + (dir / "fuse.sbatch").string());
+      for (const auto& j : fusion_jobs) {
+        const std::string path = (dir / (j + ".sbatch")).string();
+        FILE* pipe = popen(("sbatch --parsable " + dependency + quote(path)).c_str(), "r");
+        char buf[128] = {0};
+        const bool got = pipe && std::fgets(buf, sizeof(buf), pipe);
+        const int rc = pipe ? pclose(pipe) : -1;
+        if (!got || rc != 0) throw std::runtime_error("sbatch could not submit " + path);
+        std::string id = buf;
+        id = id.substr(0, id.find_first_of(";\n"));
+        dependency = "--dependency=afterok:" + id + " ";
+        std::printf("lanemap-city: %s job %s\n", j.c_str(), id.c_str());
       }
       return 0;
     }
@@ -335,6 +520,47 @@ int main(int argc, char** argv) {
     const fs::path map_dir = store / "map", partial = store / "map.partial", old = store / "map.old";
     fs::remove_all(partial);
     const auto f0 = Clock::now();
+    if (o.shards > 0) {  // prepare, the shards `jobs` at a time, assemble
+      sharded.prepare(all, o.shards, offsets, o.no_align);
+      const auto plan = sharded.plan();
+      std::map<pid_t, int> shard_of;
+      std::vector<double> shard_s(o.shards, 0.0);
+      std::vector<Clock::time_point> shard_t0(o.shards);
+      std::string first_error;
+      auto reap_shard = [&]() {
+        int status = 0;
+        const pid_t pid = waitpid(-1, &status, 0);
+        if (pid < 0) return;
+        const int k = shard_of.at(pid);
+        shard_of.erase(pid);
+        shard_s[k] = std::chrono::duration<double>(Clock::now() - shard_t0[k]).count();
+        try {
+          sharded.finishShard(k, lanemap::exitCode(status));
+        } catch (const std::exception& e) {
+          if (first_error.empty()) first_error = e.what();
+        }
+      };
+      for (int k = 0; k < o.shards; ++k) {
+        while (static_cast<int>(shard_of.size()) >= jobs) reap_shard();
+        fs::remove_all(sharded.partial(k));
+        shard_t0[k] = Clock::now();
+        const pid_t pid = lanemap::spawnLogged(sharded.shardArgs(plan, k), sharded.log(k));
+        if (pid < 0) throw std::runtime_error("cannot start " + offline.string());
+        shard_of[pid] = k;
+      }
+      while (!shard_of.empty()) reap_shard();
+      if (!first_error.empty()) throw std::runtime_error(first_error + "\n(the map of the store is as it was)");
+      double sum = 0.0;
+      for (double v : shard_s) sum += v;
+      const double shards_wall = std::chrono::duration<double>(Clock::now() - f0).count();
+      sharded.assemble();
+      std::printf("lanemap-city: %zu drive%s fused in %d shards on %d job%s (%.1f s wall with the offsets solved first, the "
+                  "shards' own times add up to %.1f s), assembled in %.1f s into %s; %.1f s in all\n",
+                  all.size(), all.size() == 1 ? "" : "s", o.shards, jobs, jobs == 1 ? "" : "s", shards_wall, sum,
+                  std::chrono::duration<double>(Clock::now() - f0).count() - shards_wall, map_dir.c_str(),
+                  std::chrono::duration<double>(Clock::now() - t0).count());
+      return failed > 0 ? 1 : 0;
+    }
     const pid_t pid = lanemap::spawnLogged(fuseArgs(all, partial.string()), (store / "fuse.log").string());
     int status = 0;
     if (pid < 0 || waitpid(pid, &status, 0) < 0 || lanemap::exitCode(status) != 0) {

@@ -29,7 +29,13 @@
 //
 // In two halves (lanemap-city runs them on several cores or Slurm nodes): `--log D --project-only
 // DIR` projects one drive and keeps what its BEV builder hands over (DriveProjection), `--traversals
-// DIR ...` maps projected drives in the order given, as their logs would have been mapped.
+// DIR ...` maps projected drives in the order given, as their logs would have been mapped. The
+// second half in shards of roads: `--drive-offsets --offsets-out F` solves the drives' offsets
+// once; `--shard K/N --offsets-in F --out SK` fuses and explores the roads whose id is K modulo N
+// (no lane carried in from a neighbour: it may be another shard's), keeping each road's lanes
+// (roads/road_<id>.json, core/io/lane_map_json.h: lossless) and grids; `--assemble S0 ... --out
+// DIR` takes every shard's roads, carries lanes into the short roads left with none, builds the
+// junctions and writes the map one process would have written.
 //
 // The road being driven when a log ends never closed: it is explored on what was driven, as far as
 // the car's last pose (core/mapping/partial_road.h), and its lanelets are tagged partial with that
@@ -48,6 +54,7 @@
 #include "core/io/geojson.h"
 #include "core/intersections/regulatory.h"
 #include "core/io/lanelet2.h"
+#include "core/io/lane_map_json.h"
 #include "core/lanes/stop_lines.h"
 #include "core/io/map_png.h"
 #include "core/io/speed_limits.h"
@@ -98,6 +105,10 @@ struct Options {
   std::vector<std::string> traversals;  // drives projected before (--project-only folders), mapped in this order
   bool no_align = false;          // merge later drives' BEV unaligned (to measure what alignment does)
   bool drive_offsets = false;     // --traversals: each drive's offset solved over the roads drives share first
+  std::string offsets_out;        // --drive-offsets: write the solved offsets here and stop (a sharded fusion's first task)
+  std::string offsets_in;         // --traversals: the drives' offsets from this file (--offsets-out), not solved
+  std::string shard;              // "K/N": fuse and explore only the roads with id % N == K (no junctions, no map)
+  std::vector<std::string> assemble;  // the shards' folders: their roads into one map (junctions, export)
   std::string osm, out;
   std::string semantic_channel;  // empty: segment CAMERA_FRONT with the model
   bool oracle = false;
@@ -217,6 +228,77 @@ bev::DriveOffsets solveDriveOffsets(const std::vector<std::string>& dirs, const 
   return solver.solve();
 }
 
+// Folders as one spelling (absolute, normalised), so a file naming them can be checked against
+// the command line that reads it.
+std::vector<std::string> canonicalPaths(const std::vector<std::string>& dirs) {
+  std::vector<std::string> out;
+  for (const auto& d : dirs) out.push_back(fs::weakly_canonical(fs::absolute(d)).string());
+  return out;
+}
+
+// --offsets-out / --offsets-in: the drives' solved offsets, named by the traversals they were
+// solved over (a file solved over other drives is refused).
+void writeDriveOffsets(const std::string& path, const std::vector<std::string>& traversals, const bev::DriveOffsets& off) {
+  nlohmann::json j = {{"traversals", canonicalPaths(traversals)}, {"offset_m", nlohmann::json::array()},
+                      {"measurements", off.measurements}, {"component", off.component}};
+  for (const auto& v : off.offset_m) j["offset_m"].push_back({v.x(), v.y()});
+  io::writeFileAtomically(path, j.dump(1) + "\n");
+}
+bev::DriveOffsets readDriveOffsets(const std::string& path, const std::vector<std::string>& traversals) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read the drives' offsets " + path);
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  if (j.is_discarded() || !j.contains("traversals") || !j.contains("offset_m")) {
+    throw std::runtime_error(path + " is not a file of drive offsets (lanemap-offline --offsets-out)");
+  }
+  if (j.at("traversals").get<std::vector<std::string>>() != canonicalPaths(traversals)) {
+    throw std::runtime_error(path + " holds the offsets of other drives than these --traversals");
+  }
+  bev::DriveOffsets off;
+  for (const auto& v : j.at("offset_m")) off.offset_m.emplace_back(v.at(0).get<double>(), v.at(1).get<double>());
+  off.measurements = j.at("measurements").get<std::vector<int>>();
+  off.component = j.at("component").get<std::vector<int>>();
+  return off;
+}
+
+// "K/N" with 0 <= K < N.
+std::pair<int, int> parseShard(const std::string& text) {
+  int k = -1, n = 0;
+  char slash = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d %c %d %c", &k, &slash, &n, &extra) != 3 || slash != '/' || n < 1 || k < 0 || k >= n) {
+    throw std::runtime_error("--shard takes K/N with 0 <= K < N (e.g. 0/4), not '" + text + "'");
+  }
+  return {k, n};
+}
+
+// --assemble: each shard folder's shard.json, checked: shards of these traversals, K/N of one N,
+// every K once.
+std::vector<std::pair<std::string, nlohmann::json>> readShards(const std::vector<std::string>& dirs,
+                                                               const std::vector<std::string>& traversals) {
+  std::vector<std::pair<std::string, nlohmann::json>> out;
+  std::set<int> ks;
+  int n_all = 0;
+  for (const auto& dir : dirs) {
+    std::ifstream in(fs::path(dir) / "shard.json");
+    const nlohmann::json j = in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
+    if (j.is_discarded() || !j.is_object() || !j.contains("shard")) {
+      throw std::runtime_error(dir + " holds no finished shard (its shard.json is written last, by lanemap-offline --shard)");
+    }
+    if (j.at("traversals").get<std::vector<std::string>>() != canonicalPaths(traversals)) {
+      throw std::runtime_error(dir + " is a shard of other drives than these --traversals");
+    }
+    const auto [k, n] = parseShard(j.at("shard").get<std::string>());
+    if (n_all != 0 && n != n_all) throw std::runtime_error(dir + " is shard " + std::to_string(k) + " of " + std::to_string(n) + ", not of " + std::to_string(n_all));
+    n_all = n;
+    if (!ks.insert(k).second) throw std::runtime_error(dir + ": shard " + std::to_string(k) + " is given twice");
+    out.emplace_back(dir, j);
+  }
+  for (int k = 0; k < n_all; ++k) {
+    if (!ks.count(k)) throw std::runtime_error("shard " + std::to_string(k) + "/" + std::to_string(n_all) + " is missing: its roads would be lost");
+  }
+  return out;
+}
+
 class OfflineMapper {
  public:
   OfflineMapper(const Options& o, const OfflineConfig& c, const skeleton::Skeleton& sk,
@@ -299,6 +381,93 @@ class OfflineMapper {
 
   // --project-only: what the drive's BEV builder hands over goes to `p`, nothing is mapped.
   void projectInto(DriveProjection* p) { projection_ = p; }
+
+  // --shard K/N: only the roads with id % N == K are fused and explored, each on its own evidence
+  // (no lanes carried in from a neighbour: those may be another shard's); writeShard() then keeps
+  // them for --assemble, which carries lanes into the short roads left with none and builds the
+  // junctions. A road's evidence is fused from its own traversals only, so every shard fuses its
+  // roads exactly as one process fusing all of them would.
+  void setShard(int k, int n) {
+    shard_k_ = k;
+    shard_n_ = n;
+  }
+  bool inShard(int64_t road_id) const { return shard_n_ <= 0 || ((road_id % shard_n_) + shard_n_) % shard_n_ == shard_k_; }
+
+  // The shard's roads into `dir` (the --out folder, whose bev/ already holds their grids):
+  // roads/road_<id>.json (core/io/lane_map_json.h, lossless: the lanes and the crosswalks the
+  // road's BEV showed) and shard.json (what the summary takes from each road, and the short roads left
+  // with no lane, for --assemble to carry lanes into).
+  void writeShard(const std::string& dir, nlohmann::json header, const nlohmann::json& drives) const {
+    const fs::path roads = fs::path(dir) / "roads";
+    fs::create_directories(roads);
+    for (const auto& [id, lanes] : assembler_.roads()) {
+      map::LaneMap m = lanes;
+      if (auto c = crosswalks_.find(id); c != crosswalks_.end()) m.crosswalks = c->second;
+      io::writeLaneMapJson(m, (roads / ("road_" + std::to_string(id) + ".json")).string());
+    }
+    nlohmann::json awaiting = nlohmann::json::array();
+    for (const auto& [id, g] : awaiting_) awaiting.push_back(id);
+    header["roads"] = road_log_;
+    header["roads_mapped"] = roads_mapped_;
+    header["roads_failed"] = roads_failed_;
+    header["partial_not_mapped"] = partial_not_mapped_;
+    header["awaiting_lanes"] = awaiting;
+    header["drives"] = drives;
+    io::writeFileAtomically((fs::path(dir) / "shard.json").string(), header.dump(1) + "\n");
+  }
+
+  // --assemble: one shard's roads (writeShard's folder) into this map; its grids move into this
+  // map's bev/. Returns the shard's drives (each drive's merges of the shard's roads).
+  nlohmann::json takeShard(const std::string& dir, const nlohmann::json& shard) {
+    for (const auto& [id, path] : bev::roadFiles((fs::path(dir) / "roads").string(), ".json")) {
+      map::LaneMap lanes = io::readLaneMapJson(path);
+      crosswalks_[id] = std::move(lanes.crosswalks);
+      lanes.crosswalks.clear();
+      assembler_.setRoad(id, std::move(lanes));
+    }
+    for (const char* sub : {"bev", "bev/partial"}) {
+      const fs::path from = fs::path(dir) / sub, to = fs::path(o_.out) / sub;
+      if (!fs::is_directory(from)) continue;
+      fs::create_directories(to);
+      for (const auto& e : fs::directory_iterator(from)) {
+        if (e.is_regular_file()) fs::rename(e.path(), to / e.path().filename());
+      }
+    }
+    for (const auto& e : shard.at("roads")) road_log_.push_back(e);
+    for (const auto& e : shard.at("partial_not_mapped")) partial_not_mapped_.push_back(e);
+    roads_mapped_ += shard.at("roads_mapped").get<int>();
+    roads_failed_ += shard.at("roads_failed").get<int>();
+    for (const auto& id : shard.at("awaiting_lanes")) {
+      awaiting_.insert_or_assign(id.get<int64_t>(), bev::BevGrid::load(bev::roadGridPath(o_.out, id.get<int64_t>())));
+    }
+    return shard.at("drives");
+  }
+
+  // --assemble, after every shard: the road log in road order, and the short roads the shards
+  // left with no lane mapped again now that every road's lanes are known (in road order; one that
+  // takes lanes gives them on to the roads awaiting it, as in one process).
+  void finishAssembly(int last_drive) {
+    drives_ = std::max(0, last_drive);  // what the roads mapped again now are mapped on
+    std::stable_sort(road_log_.begin(), road_log_.end(),
+                     [](const nlohmann::json& a, const nlohmann::json& b) { return a.at("road_id").get<int64_t>() < b.at("road_id").get<int64_t>(); });
+    std::stable_sort(partial_not_mapped_.begin(), partial_not_mapped_.end(),
+                     [](const nlohmann::json& a, const nlohmann::json& b) { return a.at("road_id").get<int64_t>() < b.at("road_id").get<int64_t>(); });
+    std::vector<int64_t> ids;
+    for (const auto& [id, g] : awaiting_) ids.push_back(id);
+    for (int64_t id : ids) {
+      auto it = awaiting_.find(id);
+      if (it == awaiting_.end()) continue;  // given lanes by one mapped before it
+      const bev::BevGrid g = it->second;
+      exploreAndSet(id, g, std::nullopt, true);
+    }
+  }
+  // A projection's frame counts alone (--assemble: the shards fused its roads).
+  void countProjection(const nlohmann::json& m) {
+    frames_projected_ += m.value("frames_projected", int64_t{0});
+    frames_mesh_ += m.value("frames_mesh", int64_t{0});
+    frames_segmented_ += m.value("frames_segmented", int64_t{0});
+    frames_failed_ += m.value("frames_failed", int64_t{0});
+  }
   // --traversals: one drive's projection, mapped as its log would have been; with --drive-offsets
   // every grid first moved by -offset_m (whole cells: the drive's offset undone).
   void mapProjection(const std::string& dir, const nlohmann::json& m, const Eigen::Vector2d& offset_m = Eigen::Vector2d::Zero()) {
@@ -312,8 +481,10 @@ class OfflineMapper {
       moved = cells.cast<double>() * road.grid.resolution();
       return road;
     };
-    for (const auto& c : m.at("closed")) mapTraversal(traversal(c));
-    if (const auto& open = m.at("open"); !open.is_null()) {
+    for (const auto& c : m.at("closed")) {
+      if (inShard(c.at("road_id").get<int64_t>())) mapTraversal(traversal(c));
+    }
+    if (const auto& open = m.at("open"); !open.is_null() && inShard(open.at("road_id").get<int64_t>())) {
       const auto& p = open.at("last_position");
       const bev::RoadBev road = traversal(open);
       mapOpenRoad(road, Eigen::Vector2d(p.at(0).get<double>(), p.at(1).get<double>()) + moved);
@@ -500,7 +671,9 @@ class OfflineMapper {
     try {
       const auto geometry = partial ? mapping::drivenStretch(*r, partial->station_m, explorer_) : lanes::RoadGeometry::fromSkeleton(*r);
       int64_t before = -1;
-      const auto carried = mapping::lanesRunningThrough(sk_, *r, assembler_.roads(), explorer_, &before);
+      // (A shard carries nothing: the roads meeting this one may be another shard's.)
+      const auto carried = shard_n_ > 0 ? std::vector<lanes::CarriedLane>{}
+                                        : mapping::lanesRunningThrough(sk_, *r, assembler_.roads(), explorer_, &before);
       auto [res, lanes_of_road, dropped, carried_in] =
           mapping::exploreRoadLanes(grid, geometry, partial, explorer_, sk_.frame().origin(), carried);
       // Lanes from the road's own OSM way stand in until a road meeting it gets lanes to carry.
@@ -537,7 +710,7 @@ class OfflineMapper {
     } else {
       road_log_.push_back(std::move(entry));
     }
-    if (!has_lanes) return;
+    if (!has_lanes || shard_n_ > 0) return;
     std::set<int64_t> awaiting;
     for (const auto& [id, g] : awaiting_) awaiting.insert(id);
     for (int64_t id : mapping::roadsAwaitingLanesFrom(sk_, road_id, awaiting)) {
@@ -588,6 +761,7 @@ class OfflineMapper {
   DriveReach reach_;
   Eigen::AlignedBox2d network_box_;  // every road polyline point
   DriveProjection* projection_ = nullptr;         // --project-only: the drive's traversals go there
+  int shard_k_ = 0, shard_n_ = 0;                 // --shard K/N (n 0: every road)
   nlohmann::json partial_not_mapped_ = nlohmann::json::array();
   nlohmann::json drive_log_ = nlohmann::json::array();
   int drives_ = 0;
@@ -635,6 +809,19 @@ int main(int argc, char** argv) {
   app.add_flag("--drive-offsets", o.drive_offsets,
                "--traversals: first solve each drive's own pose offset over the roads drives share and undo it in all "
                "its roads, those driven once too (core/bev/drive_offsets.h)")->needs(traversals)->excludes("--no-align");
+  app.add_option("--offsets-out", o.offsets_out,
+                 "with --drive-offsets: write the solved offsets to this JSON file and stop (a sharded fusion's first "
+                 "step, lanemap-city --shards)")->needs("--drive-offsets");
+  app.add_option("--offsets-in", o.offsets_in,
+                 "--traversals: undo the drives' offsets read from this file (--offsets-out of the same traversals), "
+                 "not solved again")->needs(traversals)->excludes("--drive-offsets")->excludes("--no-align");
+  app.add_option("--shard", o.shard,
+                 "K/N: fuse and explore only the roads whose id is K modulo N, into --out's bev/, roads/ and shard.json "
+                 "(no junctions, no map: --assemble builds them from every shard)")->needs(traversals);
+  app.add_option("--assemble", o.assemble,
+                 "the folders of every --shard K/N run of these --traversals (repeatable): their roads into one map in "
+                 "--out, the short roads left with no lane given their neighbours' lanes, the junctions built")
+      ->needs(traversals)->excludes("--shard")->excludes("--drive-offsets");
   app.add_option("--osm", o.osm, "road-level OSM file of the area (.osm or .osm.pbf)")->required();
   auto* out = app.add_option("--out", o.out, "output folder (created): map.osm, map.geojson, map.png, summary.json, bev/");
   auto* oracle = app.add_flag("--oracle", o.oracle, "map on the simulator's truth labels (SEMANTIC_FRONT_TRUTH), no model");
@@ -668,7 +855,7 @@ int main(int argc, char** argv) {
     std::cerr << "lanemap-offline: --project-only projects one drive: give one --log\n";
     return 2;
   }
-  if (o.project_only.empty() && !out->count()) {
+  if (o.project_only.empty() && o.offsets_out.empty() && !out->count()) {
     std::cerr << "lanemap-offline: --out is required (the map's folder)\n";
     return 2;
   }
@@ -708,7 +895,7 @@ int main(int argc, char** argv) {
                                  std::to_string(sk.roads().size()) + ")");
       }
     }
-    if (o.project_only.empty()) fs::create_directories(fs::path(o.out) / "bev");
+    if (o.project_only.empty() && o.offsets_out.empty()) fs::create_directories(fs::path(o.out) / "bev");
     OfflineMapper mapper(o, config, sk, osm_data.restrictions, std::move(model));
     std::optional<DriveProjection> projection;
     if (!o.project_only.empty()) {
@@ -722,16 +909,46 @@ int main(int argc, char** argv) {
     // --traversals: the drives projected before, fused in the order given.
     std::optional<bev::DriveOffsets> offsets;
     if (o.drive_offsets) offsets = solveDriveOffsets(o.traversals, projections);
+    if (!o.offsets_out.empty()) {  // a sharded fusion's first step: the offsets, for every shard
+      writeDriveOffsets(o.offsets_out, o.traversals, *offsets);
+      std::printf("lanemap-offline: the offsets of %zu drives written to %s\n", o.traversals.size(), o.offsets_out.c_str());
+      return 0;
+    }
+    if (!o.offsets_in.empty()) offsets = readDriveOffsets(o.offsets_in, o.traversals);
+    if (!o.shard.empty()) {
+      const auto [k, n] = parseShard(o.shard);
+      mapper.setShard(k, n);
+    }
+    // --assemble: every shard's drives (each drive's merges of the shard's roads), by drive.
+    std::vector<nlohmann::json> shard_drives(projections.size(), nlohmann::json::array());
+    if (!o.assemble.empty()) {
+      for (const auto& [dir, shard] : readShards(o.assemble, o.traversals)) {
+        const nlohmann::json drives_of_shard = mapper.takeShard(dir, shard);
+        for (size_t d = 0; d < projections.size(); ++d) {
+          for (const auto& e : drives_of_shard.at(d).at("merged")) shard_drives[d].push_back(e);
+        }
+      }
+      for (auto& merged : shard_drives) {
+        std::stable_sort(merged.begin(), merged.end(), [](const nlohmann::json& a, const nlohmann::json& b) {
+          return a.at("road_id").get<int64_t>() < b.at("road_id").get<int64_t>();
+        });
+      }
+    }
     for (size_t d = 0; d < projections.size(); ++d) {
       const nlohmann::json& m = projections[d];
-      if (d > 0) mapper.startDrive();
-      mapper.mapProjection(o.traversals[d], m, offsets ? offsets->offset_m[d] : Eigen::Vector2d::Zero());
+      if (!o.assemble.empty()) {
+        mapper.countProjection(m);
+      } else {
+        if (d > 0) mapper.startDrive();
+        mapper.mapProjection(o.traversals[d], m, offsets ? offsets->offset_m[d] : Eigen::Vector2d::Zero());
+      }
       for (const char* k : {"events", "bytes", "bytes_skipped", "bytes_unread"}) {
         log_read[k] = log_read[k].get<int64_t>() + m.at("log_read").value(k, int64_t{0});
       }
       undecodable += m.at("log_read").value("messages_undecodable", int64_t{0});
       damaged = damaged || m.at("log_read").value("damaged", false);
-      drives.push_back({{"log", m.value("log", std::string())}, {"merged", mapper.endDrive()}});
+      drives.push_back({{"log", m.value("log", std::string())},
+                        {"merged", o.assemble.empty() ? mapper.endDrive() : std::move(shard_drives[d])}});
       if (offsets) {
         drives.back()["offset_m"] = {offsets->offset_m[d].x(), offsets->offset_m[d].y()};
         drives.back()["offset_measurements"] = offsets->measurements[d];
@@ -790,6 +1007,13 @@ int main(int argc, char** argv) {
     }
     log_read["messages_undecodable"] = g_undecodable + undecodable;
     log_read["damaged"] = damaged;
+    if (!o.shard.empty()) {  // --shard: its roads kept for --assemble, no map
+      mapper.writeShard(o.out, {{"shard", o.shard}, {"traversals", canonicalPaths(o.traversals)}}, drives);
+      std::printf("lanemap-offline: shard %s: %d roads mapped, %d failed, into %s\n", o.shard.c_str(), mapper.roadsMapped(),
+                  mapper.roadsFailed(), o.out.c_str());
+      return 0;
+    }
+    if (!o.assemble.empty()) mapper.finishAssembly(static_cast<int>(projections.size()) - 1);
     std::vector<std::string> junction_failures;
     map::LaneMap map = mapper.assembler().map(&junction_failures);
     // Stop signs, give way and traffic lights at the stop lines, from the OSM junction controls.

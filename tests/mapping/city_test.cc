@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 namespace lt = lanemap::testing;
 namespace fs = std::filesystem;
@@ -67,6 +68,26 @@ class City : public ::testing::Test {
     a.erase("seconds");
     b.erase("seconds");
     EXPECT_EQ(a, b);
+  }
+  // A sharded fusion's summary lists the roads (and each drive's merges) in road order, one
+  // process in the order it mapped them: the same entries.
+  static nlohmann::json inRoadOrder(nlohmann::json s) {
+    auto byRoad = [](nlohmann::json& a) {
+      std::stable_sort(a.begin(), a.end(), [](const nlohmann::json& x, const nlohmann::json& y) {
+        return x["road_id"].get<int64_t>() < y["road_id"].get<int64_t>();
+      });
+    };
+    s.erase("seconds");
+    byRoad(s["roads"]);
+    byRoad(s["partial_not_mapped"]);
+    for (auto& d : s["drives"]) byRoad(d["merged"]);
+    return s;
+  }
+  static void expectMapOf(const std::string& map_dir, const std::string& reference_dir) {
+    for (const char* f : {"map.osm", "map.geojson", "map.png"}) {
+      EXPECT_EQ(readFile(map_dir + "/" + f), readFile(reference_dir + "/" + f)) << f << " differs from " << reference_dir << "'s";
+    }
+    EXPECT_EQ(inRoadOrder(readJson(map_dir + "/summary.json")), inRoadOrder(readJson(reference_dir + "/summary.json")));
   }
   static lt::TempDir* tmp_;
   static std::string drives_[4];
@@ -125,9 +146,96 @@ TEST_F(City, TheSlurmJobScriptsRunTaskByTaskGiveTheSameMap) {
   expectSequentialMap(tmp_->str("slurm/map"));
 }
 
+// --shards N: each shard's roads aligned, fused and explored apart, then assembled: the map of one
+// fusion process, byte for byte (the summary's entries the same, in road order), whatever N; with
+// the drives' offsets solved too (the default), once, for every shard.
+TEST_F(City, AFusionInShardsOfRoadsGivesTheMapOfOneProcessWhateverTheNumberOfShards) {
+  auto r = lt::runCommand(city("shards1") + " --no-drive-offsets --shards 1 " + log(1) + " " + log(2) + " " + log(3));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("fused in 1 shards"), std::string::npos) << r.output;
+  expectMapOf(tmp_->str("shards1/map"), tmp_->str("sequential"));
+  EXPECT_FALSE(fs::exists(tmp_->str("shards1/fusion"))) << "the shards' work is removed once the map is in place";
+  r = lt::runCommand(city("shards3") + " --no-drive-offsets --shards 3 --jobs 2 " + log(1) + " " + log(2) + " " + log(3));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("fused in 3 shards on 2 jobs"), std::string::npos) << r.output;
+  expectMapOf(tmp_->str("shards3/map"), tmp_->str("sequential"));
+  const auto seq = readJson(tmp_->str("sequential/summary.json"));
+  std::set<int64_t> roads;
+  for (const auto& e : seq["roads"]) roads.insert(e["road_id"].get<int64_t>() % 3);
+  EXPECT_GE(roads.size(), 2u) << "the roads fall into one shard of 3: the test shows no sharding";
+  // The default: each drive's offset solved first (once), every shard undoing the same offsets.
+  r = lt::runCommand(city("offsets-one") + " " + log(1) + " " + log(2) + " " + log(3));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = lt::runCommand(city("offsets-shards") + " --shards 2 " + log(1) + " " + log(2) + " " + log(3));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  expectMapOf(tmp_->str("offsets-shards/map"), tmp_->str("offsets-one/map"));
+  EXPECT_NE(readFile(tmp_->str("offsets-shards/map/map.osm")), readFile(tmp_->str("sequential/map.osm")))
+      << "the offsets moved nothing: the test cannot tell that the shards undid them";
+}
+
+// The sharded fusion's Slurm jobs, run as Slurm would (array tasks in any order, each step after
+// the one before): the same map. An assembly before every shard has finished is refused and
+// leaves no map; the steps refuse what they cannot do.
+TEST_F(City, TheShardedSlurmJobsRunStepByStepGiveTheSameMap) {
+  auto r = lt::runCommand(city("slurm-shards") + " --no-drive-offsets --shards 2 --slurm --slurm-dry-run " + log(1) + " " + log(2) + " " + log(3));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string dir = tmp_->str("slurm-shards/slurm/");
+  EXPECT_FALSE(fs::exists(dir + "fuse.sbatch")) << "one fusion job besides the sharded ones";
+  EXPECT_NE(readFile(dir + "fuse-shards.sbatch").find("#SBATCH --array=0-1\n"), std::string::npos) << readFile(dir + "fuse-shards.sbatch");
+  EXPECT_NE(readFile(dir + "fuse-prepare.sbatch").find("--shards 2 --fuse-step prepare"), std::string::npos);
+  for (int task : {1, 2, 0}) {
+    r = lt::runCommand("SLURM_ARRAY_TASK_ID=" + std::to_string(task) + " bash " + dir + "project.sbatch");
+    ASSERT_EQ(r.exit_code, 0) << "task " << task << ": " << r.output;
+  }
+  r = lt::runCommand("SLURM_ARRAY_TASK_ID=0 bash " + dir + "fuse-shards.sbatch");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("no sharded fusion is prepared"), std::string::npos) << r.output;
+  r = lt::runCommand("bash " + dir + "fuse-prepare.sbatch");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = lt::runCommand("SLURM_ARRAY_TASK_ID=1 bash " + dir + "fuse-shards.sbatch");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = lt::runCommand("bash " + dir + "fuse-assemble.sbatch");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("shard 0 has not finished"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(tmp_->str("slurm-shards/map")));
+  r = lt::runCommand("SLURM_ARRAY_TASK_ID=2 bash " + dir + "fuse-shards.sbatch");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("no shard 2: the fusion is prepared in 2 shards"), std::string::npos) << r.output;
+  r = lt::runCommand("SLURM_ARRAY_TASK_ID=0 bash " + dir + "fuse-shards.sbatch");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = lt::runCommand("bash " + dir + "fuse-assemble.sbatch");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  expectMapOf(tmp_->str("slurm-shards/map"), tmp_->str("sequential"));
+
+  // lanemap-offline's own checks: an assembly missing a shard, or of other drives' shards.
+  std::string trav;
+  for (const char* slot : {"0000", "0001", "0002"}) trav += " --traversals " + tmp_->str("slurm-shards/projections/") + slot;
+  const std::string offline = lt::binPath("lanemap-offline") + " -q --oracle --no-lidar --osm " + osm();
+  for (int k : {0, 1, 2}) {
+    r = lt::runCommand(offline + trav + " --shard " + std::to_string(k) + "/3 --out " + tmp_->str("own/s") + std::to_string(k));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  r = lt::runCommand(offline + trav + " --assemble " + tmp_->str("own/s0") + " --assemble " + tmp_->str("own/s2") + " --out " + tmp_->str("own/m"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("shard 1/3 is missing: its roads would be lost"), std::string::npos) << r.output;
+  r = lt::runCommand(offline + " --traversals " + tmp_->str("slurm-shards/projections/0000") + " --assemble " + tmp_->str("own/s0") +
+                     " --assemble " + tmp_->str("own/s1") + " --assemble " + tmp_->str("own/s2") + " --out " + tmp_->str("own/m"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("is a shard of other drives than these --traversals"), std::string::npos) << r.output;
+  r = lt::runCommand(offline + trav + " --shard 3/3 --out " + tmp_->str("own/bad"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--shard takes K/N with 0 <= K < N"), std::string::npos) << r.output;
+  r = lt::runCommand(offline + trav + " --assemble " + tmp_->str("own/s0") + " --assemble " + tmp_->str("own/s1") + " --assemble " +
+                     tmp_->str("own/s2") + " --out " + tmp_->str("own/m"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  expectMapOf(tmp_->str("own/m"), tmp_->str("sequential"));
+}
+
 // A one-node Slurm cluster on this machine (munged, slurmctld, slurmd in a private network
-// namespace: tests/mapping/slurm_cluster.sh): lanemap-city --slurm submits the array job and the
-// fusion after it; when the jobs have run, the store holds the sequential run's map.
+// namespace: tests/mapping/slurm_cluster.sh): lanemap-city --slurm --shards 2 submits the
+// projection array, then the fusion's steps, each after the one before (afterok): the
+// preparation, the shards (an array) and the assembly; when the jobs have run, the store holds the
+// sequential run's map.
 TEST_F(City, ASlurmClusterOnThisMachineRunsTheJobsToTheSameMap) {
   if (geteuid() != 0) GTEST_SKIP() << "starting Slurm's daemons needs root (CI runs as root)";
   for (const char* tool : {"munged", "slurmctld", "slurmd", "sbatch", "unshare"}) {
@@ -135,15 +243,21 @@ TEST_F(City, ASlurmClusterOnThisMachineRunsTheJobsToTheSameMap) {
         << tool << " is missing: scripts/install-deps.sh installs munge and slurm-wlm";
   }
   const auto r = lt::runCommand("unshare -n " + std::string(LANEMAP_SOURCE_DIR) + "/tests/mapping/slurm_cluster.sh " +
-                                tmp_->str("cluster") + " 240 " + city("on-slurm") + " --no-drive-offsets --slurm " + log(1) + " " + log(2) + " " +
-                                log(3));
+                                tmp_->str("cluster") + " 240 " + city("on-slurm") + " --no-drive-offsets --shards 2 --slurm " + log(1) + " " +
+                                log(2) + " " + log(3));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("projection array job"), std::string::npos) << r.output;
+  for (const char* job : {"fuse-prepare job", "fuse-shards job", "fuse-assemble job"}) {
+    EXPECT_NE(r.output.find(job), std::string::npos) << r.output;
+  }
   for (const char* task : {"0", "1", "2"}) {
     EXPECT_TRUE(fs::exists(tmp_->str("on-slurm/slurm/project-") + task + ".log")) << "array task " << task << " did not run";
   }
-  ASSERT_TRUE(fs::exists(tmp_->str("on-slurm/map/map.osm"))) << readFile(tmp_->str("on-slurm/slurm/fuse.log"));
-  expectSequentialMap(tmp_->str("on-slurm/map"));
+  for (const char* task : {"0", "1"}) {
+    EXPECT_TRUE(fs::exists(tmp_->str("on-slurm/slurm/fuse-shards-") + task + ".log")) << "shard task " << task << " did not run";
+  }
+  ASSERT_TRUE(fs::exists(tmp_->str("on-slurm/map/map.osm"))) << readFile(tmp_->str("on-slurm/slurm/fuse-assemble.log"));
+  expectMapOf(tmp_->str("on-slurm/map"), tmp_->str("sequential"));
 }
 
 // By default each drive's own offset is solved over the roads drives share (--drive-offsets). Drives

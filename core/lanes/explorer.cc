@@ -1174,6 +1174,11 @@ bool extendToTaper(const Raster& R, const FrenetFrame& frame, const ExplorerOpti
   const double d0 = lane->centre.d(s0);
   const double l0 = probeBoundary(R, o, s0, d0, +1, &h0l), r0 = probeBoundary(R, o, s0, d0, -1, &h0r);
   std::vector<double> ss{s0}, ls{h0l != kUnobserved ? l0 : lane->left.d[k0]}, rs{h0r != kUnobserved ? r0 : lane->right.d[k0]};
+  // The inner line (towards the other lane) is on this lane's side of the other's centre: a probe
+  // through a gap between dashes finds the other lane's far line, and the stored bound is taken.
+  const double other0 = other.dAt(s0);
+  if (left_of_other && rs[0] < other0 + 0.5) rs[0] = std::max(lane->right.d[k0], 0.5 * (d0 + other0));
+  if (!left_of_other && ls[0] > other0 - 0.5) ls[0] = std::min(lane->left.d[k0], 0.5 * (d0 + other0));
   // Each line's last sightings (s, d), to follow it across a gap.
   std::vector<std::pair<double, double>> seen_l{{s0, ls[0]}}, seen_r{{s0, rs[0]}};
   const auto predict = [&](const std::vector<std::pair<double, double>>& seen, double t) {
@@ -1186,6 +1191,12 @@ bool extendToTaper(const Raster& R, const FrenetFrame& frame, const ExplorerOpti
     }
     return last.second;
   };
+  // The walk may reach the explored stretch's end (a junction's ROI) with the lines still a lane
+  // apart: then the lane was there from the junction (seen late after a turn, or lost in its last
+  // metres), not a pocket; it runs to the stretch's end and splits from (merges into) nothing.
+  const double stretch_end = at_start ? live0 : live1;
+  const bool may_reach_end = o.pocket_to_junction && std::abs(limit - stretch_end) <= 1.0 + 1e-9;  // (the other lane's end: 1 m short of it)
+  double min_width = INFINITY;
   bool closed = false;
   for (double t = s0 + dir * kStep; at_start ? t >= limit : t <= limit; t += dir * kStep) {
     const double pl = predict(seen_l, t), pr = predict(seen_r, t);
@@ -1201,12 +1212,20 @@ bool extendToTaper(const Raster& R, const FrenetFrame& frame, const ExplorerOpti
     ss.push_back(t);
     ls.push_back(l);
     rs.push_back(r);
+    min_width = std::min(min_width, l - r);
     if (l - r < o.pocket_min_width_m) {
       closed = true;
       break;
     }
   }
-  if (!closed || ss.size() < 3) return false;
+  const bool to_junction = !closed && may_reach_end && min_width >= o.lane_width_min_m &&
+                           std::abs(ss.back() - stretch_end) <= 1.0 + kStep + 1e-9;
+  if (!(closed || to_junction) || ss.size() < 3) return false;
+  if (to_junction && ss.back() != stretch_end) {  // on to the stretch's end, the lines as last found
+    ss.push_back(stretch_end);
+    ls.push_back(ls.back());
+    rs.push_back(rs.back());
+  }
   if (at_start) {  // in the order of s
     std::reverse(ss.begin(), ss.end());
     std::reverse(ls.begin(), ls.end());
@@ -1278,6 +1297,7 @@ bool extendToTaper(const Raster& R, const FrenetFrame& frame, const ExplorerOpti
     out.left.points.push_back(frame.toEnu(s, out.left.d[k]));
     out.right.points.push_back(frame.toEnu(s, out.right.d[k]));
   }
+  if (to_junction) (at_start ? out.split_from : out.merges_into) = -1;
   *lane = std::move(out);
   return true;
 }

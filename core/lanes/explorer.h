@@ -46,7 +46,9 @@
 //    mean lies midway between the lines' near edges, off by up to a fifth of a metre beside a
 //    double line or a kerb. A lane split off another (a turn pocket) then starts where its taper
 //    does, not where a footprint first fitted beside its parent, and a lane merging into another
-//    ends where its taper closes (extendPocketsToTheirTaper).
+//    ends where its taper closes (extendPocketsToTheirTaper); one whose lines stay a lane apart
+//    back to the junction's ROI (a lane seen late after a turn, or lost in its last metres) runs
+//    to the junction and splits from (merges into) nothing (pocket_to_junction).
 #pragma once
 
 #include "core/bev/bev_grid.h"

@@ -68,6 +68,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("split_neighbour_m", o.split_neighbour_m);
   r.read("pocket_taper_max_m", o.pocket_taper_max_m);
   r.read("pocket_min_width_m", o.pocket_min_width_m);
+  r.read("pocket_to_junction", o.pocket_to_junction);
   r.read("bulge_density_fraction", o.bulge_density_fraction);
   r.read("min_drivable_share", o.min_drivable_share);
   r.read("weak_density_fraction", o.weak_density_fraction);

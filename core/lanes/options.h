@@ -98,6 +98,9 @@ struct ExplorerOptions {
   double pocket_taper_max_m = 40.0;      // a lane split off another (a turn pocket) starts where its
                                          //   taper does, looked for this far back (0: where it was found)
   double pocket_min_width_m = 0.6;       // ... where its two lines close in to under this
+  bool pocket_to_junction = true;        // ... and one whose lines stay a lane apart (lane_width_min_m)
+                                         //   back to the junction's ROI ran from the junction: it
+                                         //   starts there, split from nothing (likewise at the end)
   double bulge_density_fraction = 0.15;  // a lane that splits off or merges into a lane with fewer
                                          //   particles per metre than this fraction of that lane's
                                          //   is noise beside it, not a lane

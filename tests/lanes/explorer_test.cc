@@ -211,6 +211,35 @@ TEST(Explorer, SplitIntoTurnPocket) {
   EXPECT_EQ(m.lines.size(), 2 * m.lanelets.size() - 3);
 }
 
+TEST(Explorer, ALaneSeenLateAfterATurnRunsFromTheJunctionWhereItsLinesDo) {
+  // Two lanes whose lines run the whole road. The left lane's ground is not seen over its first
+  // metres (to s = 14: the car turned in from the right, and the frames of the turn saw only
+  // its lines there, each cell once or not at all): no particle is seeded there, and the lane is
+  // found beside the right lane past them, as a lane splitting off it.
+  // Its two lines stay a lane apart back to the junction's ROI (s = 3), so it starts there and
+  // splits off nothing; a pocket whose lines close in starts at its taper instead
+  // (SplitIntoTurnPocket).
+  Scenario sc = straightLanes({3.5, 3.5}, 120.0);
+  sc.layout.far.push_back({0.0, 14.0, 0.2, 3.3, 0.0, 1.0});
+  ExplorerOptions off;
+  off.pocket_to_junction = false;
+  const Report before = run(sc, 1, off);
+  bool split_late = false;
+  for (const Lane& l : before.result.lanes) split_late |= before.match[l.id] == 0 && l.s_begin > 12.0 && l.split_from >= 0;
+  ASSERT_TRUE(split_late) << "the smear does not stop the left lane: the test shows nothing";
+  const Report rep = run(sc);
+  expectLanes(rep, sc);
+  for (const Lane& l : rep.result.lanes) {
+    EXPECT_LT(l.s_begin, 3.0 + 0.5) << "lane " << l.id << " (truth " << rep.match[l.id] << ")";
+    EXPECT_EQ(l.split_from, -1) << "lane " << l.id;
+  }
+  EXPECT_EQ(rep.result.laneCountAt(5.0), 2);
+  // In Lanelet2: two lanes side by side, no fork.
+  const map::LaneMap m = toLaneMap(rep.result);
+  EXPECT_TRUE(io::orientationProblems(m).empty());
+  for (const auto& ll : m.lanelets) EXPECT_LE(ll.successors.size(), 1u);
+}
+
 TEST(Explorer, BusBay) {
   // Two lanes; a 3 m bus bay on the right from s = 80 to 130 (10 m tapers), behind a solid line.
   Scenario sc = straightLanes({3.5, 3.5}, 220.0);

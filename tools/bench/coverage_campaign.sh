@@ -120,4 +120,15 @@ else
   echo "  Lanelet2's checks: not built (tests/lanelet2_tools builds them) or no fused map"
 fi
 echo "  lanemap-city, last step: $(grep -h 'fused in' "$out/map$drives.log" || echo '(no fusion)')"
+# The store fused again in shards of roads (lanemap-city --shards 2: both cores), beside one process:
+# the wall times, and whether the maps are the same bytes (they must be).
+if [ -f "$out/city/map/map.osm" ]; then
+  cp "$out/city/map/map.osm" "$out/map-one-process.osm"
+  for shards in 0 2; do
+    "$bin/lanemap-city" --store "$out/city" --osm "$out/drive1/roads.osm" --oracle --no-lidar \
+      $([ $shards -gt 0 ] && echo --shards $shards) > "$out/refuse$shards.log" 2>&1 || echo "  re-fusion (shards $shards) failed: see $out/refuse$shards.log"
+  done
+  same=$(cmp -s "$out/map-one-process.osm" "$out/city/map/map.osm" && echo "the same bytes" || echo "DIFFERENT (a bug)")
+  echo "  the store fused again: one process: $(grep -ho 'fused in [0-9.]* s' "$out/refuse0.log"); in 2 shards: $(grep -ho 'fused in 2 shards.*assembled in [0-9.]* s' "$out/refuse2.log"); map.osm $same"
+fi
 echo "  (SHARE: of the city's $(python3 -c "import json,sys; print(round(json.load(open(sys.argv[1]))['total_m']))" "$out/coverage1.json") m of directed road; the issue's target is 90 % with --plan)"

@@ -413,6 +413,7 @@ class Builder {
   double m_;  // +1 right-hand traffic, -1 mirrored
   std::unique_ptr<SimWorld::Impl> impl_;
   int64_t next_id_ = 1;
+  int fill_level_ = 0;  // the OSM level of what is being painted (WorldOptions::osm_layers)
   std::vector<CrossSection> xss_;
   std::unordered_map<int64_t, int64_t> xs_of_road_;
   std::unordered_map<int64_t, int> degree_;

@@ -4,9 +4,35 @@
 
 #include "core/sim/world_build.h"
 
+#include <algorithm>
+#include <limits>
+#include <string>
+
 namespace lanemap::sim {
 
 namespace world_build {
+
+// A road's OSM level: its `layer` (an integer, clamped to -5..5), else 1 on a bridge and -1 in a
+// tunnel (bridge=yes, viaduct, ...; tunnel=yes, building_passage, ...; "no" is none), else 0.
+int osmLevel(const skeleton::AtomicRoad& road) {
+  const auto tag = [&](const char* k) -> std::string {
+    const auto it = road.tags.find(k);
+    return it == road.tags.end() ? std::string() : it->second;
+  };
+  const std::string layer = tag("layer");
+  if (!layer.empty()) {
+    try {
+      size_t used = 0;
+      const int v = std::stoi(layer, &used);
+      if (used == layer.size()) return std::clamp(v, -5, 5);
+    } catch (const std::exception&) {
+    }
+  }
+  const std::string bridge = tag("bridge"), tunnel = tag("tunnel");
+  if (!bridge.empty() && bridge != "no") return 1;
+  if (!tunnel.empty() && tunnel != "no") return -1;
+  return 0;
+}
 
 std::unique_ptr<SimWorld::Impl> Builder::run() {
   if (sk_.roads().empty()) throw std::runtime_error("buildWorld: the skeleton has no road");
@@ -20,8 +46,23 @@ std::unique_ptr<SimWorld::Impl> Builder::run() {
   // width still fold on its inner side (a known limit, see the Monaco test).
   for (auto& xs : xss_) xs.line = RefLine(xs.ref->polyline, 1.0, std::clamp(xs.halfWidth(), 3.0, 8.0));
   computeNodeInfo();
-  for (auto& xs : xss_) buildCrossSection(xs);
-  for (const auto& in : sk_.intersections()) buildIntersection(in);
+  // Paint levels: a road's OSM level; an intersection's, the highest of its roads' (a bridge's
+  // end joins the roads at its level, and its deck is painted over the roads beneath).
+  for (auto& xs : xss_) {
+    fill_level_ = o_.osm_layers ? osmLevel(*xs.ref) : 0;
+    buildCrossSection(xs);
+  }
+  for (const auto& in : sk_.intersections()) {
+    fill_level_ = std::numeric_limits<int>::min();
+    for (const auto* ids : {&in.incoming, &in.outgoing}) {
+      for (int64_t id : *ids) {
+        if (const auto* r = sk_.road(id)) fill_level_ = std::max(fill_level_, o_.osm_layers ? osmLevel(*r) : 0);
+      }
+    }
+    if (fill_level_ == std::numeric_limits<int>::min()) fill_level_ = 0;
+    buildIntersection(in);
+  }
+  fill_level_ = 0;
   shareOpposedIntersectionBounds();
   placeObstacles();
   for (auto& cw : truth().crosswalks) cw.id = nextId();

@@ -34,6 +34,12 @@ struct WorldOptions {
   uint64_t seed = 1;
   bool flat = false;                // no grade, crown, bumps: height() == 0 everywhere
   bool right_hand_traffic = true;   // false: left-hand traffic (the layout is mirrored)
+  // Roads on different OSM levels (`layer`, else bridge=* 1 and tunnel=* -1) that cross: the world
+  // is one ground, so where they overlap the upper road's surface and paint are painted over the
+  // lower one's (what a car on the bridge sees; a car under it sees the bridge's deck painted
+  // across its road for the deck's width, where false painted every road's kerbs and lines over
+  // every road's lanes: a ramp's kerbs across the motorway below it).
+  bool osm_layers = true;
 
   // Lanes. A lane's width is width/lanes when the way has `width`, else the class default (or
   // default_lane_width_m when > 0) plus a seeded per-lane variation; always clamped to the range.

@@ -52,6 +52,7 @@ WorldOptions WorldOptions::fromYaml(const config::YamlReader& r) {
   r.read("seed", o.seed);
   r.read("flat", o.flat);
   r.read("right_hand_traffic", o.right_hand_traffic);
+  r.read("osm_layers", o.osm_layers);
   const auto lanes = r.section("lanes");
   lanes.read("default_width_m", o.default_lane_width_m);
   lanes.read("width_jitter_m", o.lane_width_jitter_m);

@@ -8,6 +8,7 @@ void Builder::addFill(Surface s, detail::Layer layer, std::vector<Vector2d> poly
   if (poly.size() < 3) return;
   FillPrimitive f;
   f.surface = s;
+  f.level = fill_level_;
   f.layer = layer;
   f.lanelet = lanelet;
   f.faded = faded;

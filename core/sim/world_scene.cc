@@ -316,7 +316,9 @@ std::shared_ptr<const Tile> SimWorld::Impl::buildTile(int64_t ix, int64_t iy) co
 void SimWorld::Impl::finalize() {
   uid = g_next_uid.fetch_add(1);
   std::stable_sort(fills.begin(), fills.end(),
-                   [](const detail::FillPrimitive& a, const detail::FillPrimitive& b) { return a.layer < b.layer; });
+                   [](const detail::FillPrimitive& a, const detail::FillPrimitive& b) {
+                     return a.level != b.level ? a.level < b.level : a.layer < b.layer;
+                   });
   const double size = options.tile_size_m;
   auto index = [&](const Eigen::AlignedBox2d& box, uint32_t idx, std::unordered_map<int64_t, std::vector<uint32_t>>& m) {
     if (box.isEmpty()) return;

@@ -34,6 +34,7 @@ enum Layer : uint8_t {
 
 struct FillPrimitive {
   Surface surface = Surface::kOffRoad;
+  int level = 0;             // the OSM level of its road (WorldOptions::osm_layers): drawn before `layer`
   Layer layer = kLayerSidewalk;
   bool faded = false;        // worn paint: only part of its pixels are painted
   int64_t lanelet = -1;      // driving lanes: the lanelet id written to the id raster

@@ -1,0 +1,124 @@
+// Roads on different OSM levels in the simulator's one-ground world (WorldOptions::osm_layers): a
+// bridge (layer=1) over a street, a tunnel (layer=-1) under it. Where they cross, the upper road's
+// surface and paint lie over the lower one's: along the bridge's lanes nothing of the street shows
+// (no kerb, no line, no lane of it), where, with every road on one level, the street's kerbs cut
+// across the bridge's lanes; and nothing of the tunnel shows on the street.
+#include "core/osm/osm_data.h"
+#include "core/sim/world_builder.h"
+#include "core/skeleton/skeleton.h"
+#include "tests/common/temp_dir.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace lanemap::sim {
+namespace {
+
+constexpr double kLat0 = 37.80, kLon0 = -122.27;
+
+// An OSM file of three straight two-way ways (two lanes), none sharing a node: a bridge along x,
+// a street along y crossing it at the origin, a tunnel along x 60 m north crossing the street.
+std::string crossingOsm() {
+  std::ostringstream o;
+  o.precision(10);
+  const double m_lat = 1.0 / 111320.0, m_lon = 1.0 / (111320.0 * std::cos(kLat0 * M_PI / 180.0));
+  int id = 1;
+  auto node = [&](double x, double y) {
+    o << "  <node id=\"" << id << "\" lat=\"" << kLat0 + y * m_lat << "\" lon=\"" << kLon0 + x * m_lon << "\"/>\n";
+    return id++;
+  };
+  o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<osm version=\"0.6\">\n";
+  const int b0 = node(-150, 0), b1 = node(150, 0);
+  const int s0 = node(0, -150), s1 = node(0, 150);
+  const int t0 = node(-150, 60), t1 = node(150, 60);
+  auto way = [&](int wid, int a, int b, const std::string& extra) {
+    o << "  <way id=\"" << wid << "\">\n    <nd ref=\"" << a << "\"/>\n    <nd ref=\"" << b << "\"/>\n"
+      << "    <tag k=\"highway\" v=\"secondary\"/>\n    <tag k=\"lanes\" v=\"2\"/>\n" << extra << "  </way>\n";
+  };
+  way(100, b0, b1, "    <tag k=\"bridge\" v=\"yes\"/>\n    <tag k=\"layer\" v=\"1\"/>\n");
+  way(200, s0, s1, "");
+  way(300, t0, t1, "    <tag k=\"tunnel\" v=\"yes\"/>\n");  // no layer tag: a tunnel is level -1
+  o << "</osm>\n";
+  return o.str();
+}
+
+struct Crossing {
+  skeleton::Skeleton sk;
+  std::map<int64_t, int64_t> way_of_road;
+};
+
+const Crossing& crossing() {
+  static const Crossing c = [] {
+    lanemap::testing::TempDir tmp("world-layers");
+    const std::string path = tmp.str("crossing.osm");
+    std::ofstream(path) << crossingOsm();
+    Crossing out{skeleton::Skeleton::build(osm::readOsm(path)), {}};
+    for (const auto& r : out.sk.roads()) out.way_of_road[r.id] = r.way_id;
+    return out;
+  }();
+  return c;
+}
+
+// What the ground shows along a line across the crossing: the set of surfaces and the ways whose
+// lanelets it lies in.
+struct Seen {
+  std::set<Surface> surfaces;
+  std::set<int64_t> ways;
+};
+Seen along(const SimWorld& w, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  Seen seen;
+  std::map<int64_t, int64_t> road_of_lanelet;
+  for (const auto& l : w.truth().lanelets) road_of_lanelet[l.id] = l.road_id;
+  const int n = static_cast<int>((b - a).norm() / 0.05);
+  for (int k = 0; k <= n; ++k) {
+    const Eigen::Vector2d p = a + (b - a) * k / n;
+    const GroundSample g = w.sample(p.x(), p.y());
+    seen.surfaces.insert(g.surface);
+    if (g.lanelet >= 0 && road_of_lanelet.count(g.lanelet)) seen.ways.insert(crossing().way_of_road.at(road_of_lanelet.at(g.lanelet)));
+  }
+  return seen;
+}
+
+std::unique_ptr<SimWorld> build(bool osm_layers) {
+  WorldOptions o;
+  o.seed = 5;
+  o.flat = true;
+  o.osm_layers = osm_layers;
+  return buildWorld(crossing().sk, o);
+}
+
+}  // namespace
+
+TEST(WorldLayers, TheUpperRoadIsPaintedOverTheLowerWhereTheyCross) {
+  const auto layered = build(true), flat = build(false);
+  // Along each of the bridge's two lanes (1.5 m either side of its line), 12 m across the street.
+  for (double y : {-1.5, 1.5}) {
+    const Seen on = along(*layered, {-12.0, y}, {12.0, y});
+    EXPECT_FALSE(on.surfaces.count(Surface::kCurb)) << "a kerb across the bridge's lane at y " << y;
+    EXPECT_EQ(on.ways, std::set<int64_t>{100}) << "the bridge's lane at y " << y << " shows another road's lanes";
+    const Seen before = along(*flat, {-12.0, y}, {12.0, y});
+    EXPECT_TRUE(before.surfaces.count(Surface::kCurb)) << "one level: the street's kerbs cross the bridge's lane (the test shows nothing)";
+    EXPECT_TRUE(before.ways.count(200)) << "one level: the street's lanes show on the bridge";
+  }
+  // The street beside the tunnel: the tunnel's paint is under the street's, so the street's lanes
+  // run on there unbroken; on one level the tunnel's kerbs cross them.
+  for (double x : {-1.5, 1.5}) {
+    const Seen on = along(*layered, {x, 50.0}, {x, 70.0});
+    EXPECT_FALSE(on.surfaces.count(Surface::kCurb)) << "a kerb across the street's lane at x " << x;
+    EXPECT_EQ(on.ways, std::set<int64_t>{200});
+    EXPECT_TRUE(along(*flat, {x, 50.0}, {x, 70.0}).surfaces.count(Surface::kCurb));
+  }
+  // Away from the crossings every road is as it was.
+  for (const auto& [a, b] : {std::pair<Eigen::Vector2d, Eigen::Vector2d>{{-100.0, -1.5}, {-60.0, -1.5}},
+                             {{1.5, -100.0}, {1.5, -60.0}}, {{-100.0, 61.5}, {-60.0, 61.5}}}) {
+    const Seen x = along(*layered, a, b), y = along(*flat, a, b);
+    EXPECT_EQ(x.surfaces, y.surfaces);
+    EXPECT_EQ(x.ways, y.ways);
+  }
+}
+}  // namespace lanemap::sim

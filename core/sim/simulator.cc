@@ -1,5 +1,7 @@
 #include "core/sim/simulator.h"
 
+#include "core/sim/world_builder.h"
+
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
@@ -98,7 +100,11 @@ PoseMeasurement Simulator::poseAt(double t, PoseNoise& noise, double dt) const {
 
 CameraMeasurement Simulator::cameraAt(double t, int64_t seq) const {
   const VehicleState st = trajectory_.at(t);
-  const RenderedFrame f = renderer_.render(world_, st.vehicle_to_enu, st.label_lanelet,
+  // A world of several OSM levels is seen from the car's (a bridge over it is not on its ground).
+  const auto* sim_world = dynamic_cast<const SimWorld*>(&world_);
+  const std::optional<WorldSeenFromLevel> view =
+      sim_world ? std::make_optional<WorldSeenFromLevel>(*sim_world, sim_world->levelOf(st.label_lanelet)) : std::nullopt;
+  const RenderedFrame f = renderer_.render(view ? static_cast<const World&>(*view) : world_, st.vehicle_to_enu, st.label_lanelet,
                                            options_.seed * 1000003ULL + static_cast<uint64_t>(seq));
   CameraMeasurement m;
   m.utime = toUtime(options_.start_utime, t);
@@ -156,8 +162,13 @@ SimulatorCounts Simulator::run(SensorSink& sink, const std::function<void(double
     return e;
   };
   auto castSweep = [this, t0_abs, sweep_dt](int64_t i) {
+    // Seen from the car's OSM level at the sweep's start (as camera frames are).
+    const auto* sim_world = dynamic_cast<const SimWorld*>(&world_);
+    const std::optional<WorldSeenFromLevel> view =
+        sim_world ? std::make_optional<WorldSeenFromLevel>(*sim_world, sim_world->levelOf(trajectory_.at(i * sweep_dt).label_lanelet))
+                  : std::nullopt;
     return scanner_->cast(
-        world_, t0_abs + i * sweep_dt,
+        view ? static_cast<const World&>(*view) : world_, t0_abs + i * sweep_dt,
         [this, t0_abs](double t_abs) { return trajectory_.at(t_abs - t0_abs).vehicle_to_enu; },
         options_.seed * 7777ULL + static_cast<uint64_t>(i));
   };

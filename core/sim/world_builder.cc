@@ -46,20 +46,24 @@ std::unique_ptr<SimWorld::Impl> Builder::run() {
   // width still fold on its inner side (a known limit, see the Monaco test).
   for (auto& xs : xss_) xs.line = RefLine(xs.ref->polyline, 1.0, std::clamp(xs.halfWidth(), 3.0, 8.0));
   computeNodeInfo();
-  // Paint levels: a road's OSM level; an intersection's, the highest of its roads' (a bridge's
-  // end joins the roads at its level, and its deck is painted over the roads beneath).
+  // Paint levels: a road's OSM level; an intersection's, the lowest of its roads' (where a bridge
+  // comes down to the roads at its end, the junction is on both levels: seen from the road below
+  // it must not vanish with the bridge).
   for (auto& xs : xss_) {
     fill_level_ = o_.osm_layers ? osmLevel(*xs.ref) : 0;
+    impl_->road_level[xs.ref->id] = fill_level_;
+    if (xs.rev) impl_->road_level[xs.rev->id] = fill_level_;
     buildCrossSection(xs);
   }
   for (const auto& in : sk_.intersections()) {
-    fill_level_ = std::numeric_limits<int>::min();
+    fill_level_ = std::numeric_limits<int>::max();
     for (const auto* ids : {&in.incoming, &in.outgoing}) {
       for (int64_t id : *ids) {
-        if (const auto* r = sk_.road(id)) fill_level_ = std::max(fill_level_, o_.osm_layers ? osmLevel(*r) : 0);
+        if (const auto* r = sk_.road(id)) fill_level_ = std::min(fill_level_, o_.osm_layers ? osmLevel(*r) : 0);
       }
     }
-    if (fill_level_ == std::numeric_limits<int>::min()) fill_level_ = 0;
+    if (fill_level_ == std::numeric_limits<int>::max()) fill_level_ = 0;
+    impl_->node_level[in.id] = fill_level_;
     buildIntersection(in);
   }
   fill_level_ = 0;

@@ -35,10 +35,11 @@ struct WorldOptions {
   bool flat = false;                // no grade, crown, bumps: height() == 0 everywhere
   bool right_hand_traffic = true;   // false: left-hand traffic (the layout is mirrored)
   // Roads on different OSM levels (`layer`, else bridge=* 1 and tunnel=* -1) that cross: the world
-  // is one ground, so where they overlap the upper road's surface and paint are painted over the
-  // lower one's (what a car on the bridge sees; a car under it sees the bridge's deck painted
-  // across its road for the deck's width, where false painted every road's kerbs and lines over
-  // every road's lanes: a ramp's kerbs across the motorway below it).
+  // is one ground, painted per level, the upper level's surface and paint over the lower's; a
+  // camera or LIDAR sees it from its car's level (SimWorld::sampleSeenFrom): its own level over
+  // those beneath, the levels above (a bridge over its road) left out. An intersection is on the
+  // lowest level of its roads. false: every road on one level, every road's kerbs and lines
+  // painted over every road's lanes (a ramp's kerbs across the motorway under it).
   bool osm_layers = true;
 
   // Lanes. A lane's width is width/lanes when the way has `width`, else the class default (or
@@ -147,6 +148,13 @@ class SimWorld : public World {
   const map::LineString* line(int64_t id) const;          // O(1); nullptr if unknown
   const std::vector<int64_t>& predecessors(int64_t lanelet_id) const;
   const map::Lanelet* laneletAt(double east, double north) const;  // road lanelet under a point
+  // Roads on several OSM levels (WorldOptions::osm_layers): the ground as a car on level `level`
+  // sees it where roads of different levels cross: its own level's paint over those beneath, the
+  // levels above it (a bridge over it) left out; sample() is the view from above (every level, the
+  // upper over the lower). levelOf: the level of a lanelet's road or intersection (a value above
+  // every level for an unknown id).
+  GroundSample sampleSeenFrom(double east, double north, int level) const;
+  int levelOf(int64_t lanelet_id) const;
   // The smooth terrain plus bumps, without the road's own shape (crown, curbs): height() minus
   // this is the cross-section profile. 0 when flat.
   double terrainHeight(double east, double north) const;
@@ -157,6 +165,23 @@ class SimWorld : public World {
 
  private:
   std::unique_ptr<Impl> impl_;
+};
+
+// A SimWorld as seen from one OSM level (SimWorld::sampleSeenFrom): what the simulator renders a
+// camera frame or a LIDAR sweep on, the level that of the car's lanelet.
+class WorldSeenFromLevel : public World {
+ public:
+  WorldSeenFromLevel(const SimWorld& world, int level) : w_(world), level_(level) {}
+  double height(double east, double north) const override { return w_.height(east, north); }
+  GroundSample sample(double east, double north) const override { return w_.sampleSeenFrom(east, north, level_); }
+  void obstaclesNear(const Eigen::Vector2d& p, double radius, std::vector<const Obstacle*>* out) const override {
+    w_.obstaclesNear(p, radius, out);
+  }
+  std::optional<int> laneOffset(int64_t ego, int64_t other) const override { return w_.laneOffset(ego, other); }
+
+ private:
+  const SimWorld& w_;
+  int level_;
 };
 
 // Throws WorldConfigError on bad options, std::runtime_error if the skeleton has no road.

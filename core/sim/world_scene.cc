@@ -23,6 +23,7 @@ std::atomic<uint64_t> g_next_uid{1};
 struct TlsTile {
   uint64_t uid = 0;
   int64_t key = 0;
+  int level = 0;
   std::shared_ptr<const Tile> tile;
 };
 constexpr int kTlsSlots = 4;
@@ -36,6 +37,8 @@ thread_local unsigned t_next = 0;
 struct TlsLast {
   uint64_t uid = 0;
   double xlo = 1.0, xhi = 0.0, ylo = 1.0, yhi = 0.0;  // empty
+  int view = 0;         // the level it was asked for ...
+  bool any_view = false;  // ... or any: the tile has fills of one level only
   const Tile* tile = nullptr;
 };
 thread_local TlsLast t_last;
@@ -69,34 +72,48 @@ int64_t SimWorld::Impl::tileKeyAt(double east, double north, int64_t* ix, int64_
   return tileKey(x, y);
 }
 
-const Tile& SimWorld::Impl::tileAt(double east, double north) const {
+int SimWorld::Impl::tileLevel(int64_t key, int view) const {
+  const auto it = levels_by_tile.find(key);
+  if (it == levels_by_tile.end() || view >= it->second.back()) return kAllLevels;
+  int level = it->second.front();
+  for (int l : it->second) {
+    if (l <= view) level = l;
+  }
+  return level;
+}
+
+const Tile& SimWorld::Impl::tileAt(double east, double north, int view) const {
   const TlsLast& last = t_last;
-  if (last.uid == uid && east >= last.xlo && east < last.xhi && north >= last.ylo && north < last.yhi) {
+  if (last.uid == uid && (last.any_view || last.view == view) && east >= last.xlo && east < last.xhi && north >= last.ylo && north < last.yhi) {
     return *last.tile;
   }
   int64_t ix = 0, iy = 0;
   const int64_t key = tileKeyAt(east, north, &ix, &iy);
+  const int level = levels_by_tile.empty() ? kAllLevels : tileLevel(key, view);
   const Tile* found = nullptr;
   for (auto& t : t_tiles) {
-    if (t.uid == uid && t.key == key && t.tile) {
+    if (t.uid == uid && t.key == key && t.level == level && t.tile) {
       found = t.tile.get();
       break;
     }
   }
   if (!found) {
-    auto tile = fetchTile(key, ix, iy);
+    auto tile = fetchTile(key, ix, iy, level);
     TlsTile& slot = t_tiles[t_next++ % kTlsSlots];
     slot.uid = uid;
     slot.key = key;
+    slot.level = level;
     slot.tile = std::move(tile);
     found = slot.tile.get();
   }
   const double size = options.tile_size_m, margin = 1e-9 * size;
-  t_last = TlsLast{uid, ix * size + margin, (ix + 1) * size - margin, iy * size + margin, (iy + 1) * size - margin, found};
+  t_last = TlsLast{uid, ix * size + margin, (ix + 1) * size - margin, iy * size + margin, (iy + 1) * size - margin, view,
+                   levels_by_tile.count(key) == 0, found};
   return *found;
 }
 
-std::shared_ptr<const Tile> SimWorld::Impl::fetchTile(int64_t key, int64_t ix, int64_t iy) const {
+std::shared_ptr<const Tile> SimWorld::Impl::fetchTile(int64_t xy, int64_t ix, int64_t iy, int level) const {
+  const CacheKey key{xy, level};
   std::shared_future<std::shared_ptr<const Tile>> future;
   std::promise<std::shared_ptr<const Tile>> promise;
   bool build = false;
@@ -125,7 +142,7 @@ std::shared_ptr<const Tile> SimWorld::Impl::fetchTile(int64_t key, int64_t ix, i
   }
   if (build) {
     try {
-      promise.set_value(buildTile(ix, iy));
+      promise.set_value(buildTile(ix, iy, level));
     } catch (...) {
       promise.set_exception(std::current_exception());
       std::lock_guard<std::mutex> lock(mutex);
@@ -135,7 +152,7 @@ std::shared_ptr<const Tile> SimWorld::Impl::fetchTile(int64_t key, int64_t ix, i
   return future.get();
 }
 
-std::shared_ptr<const Tile> SimWorld::Impl::buildTile(int64_t ix, int64_t iy) const {
+std::shared_ptr<const Tile> SimWorld::Impl::buildTile(int64_t ix, int64_t iy, int level) const {
   auto tile = std::make_shared<Tile>();
   const double size = options.tile_size_m;
   const double res = options.tile_resolution_m;
@@ -158,6 +175,7 @@ std::shared_ptr<const Tile> SimWorld::Impl::buildTile(int64_t ix, int64_t iy) co
   if (auto it = fills_by_tile.find(key); it != fills_by_tile.end()) {
     for (uint32_t idx : it->second) {
       const auto& f = fills[idx];
+      if (f.level > level) continue;  // above the viewer (a bridge over the road it drives)
       std::vector<cv::Point> pts;
       pts.reserve(f.polygon.size());
       for (const auto& p : f.polygon) {
@@ -336,6 +354,14 @@ void SimWorld::Impl::finalize() {
     for (const auto& p : f.polygon) f.box.extend(p);
     index(f.box, i, fills_by_tile);
   }
+  levels_by_tile.clear();
+  for (const auto& [key, list] : fills_by_tile) {
+    std::vector<int> levels;
+    for (uint32_t i : list) levels.push_back(fills[i].level);
+    std::sort(levels.begin(), levels.end());
+    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+    if (levels.size() > 1) levels_by_tile[key] = std::move(levels);
+  }
   for (uint32_t i = 0; i < quads.size(); ++i) {
     auto& q = quads[i];
     q.box = Eigen::AlignedBox2d();
@@ -387,8 +413,21 @@ double SimWorld::height(double east, double north) const {
   return (1 - v) * ((1 - u) * r0[c] + u * r0[c + 1]) + v * ((1 - u) * r1[c] + u * r1[c + 1]);
 }
 
-GroundSample SimWorld::sample(double east, double north) const {
-  const Tile& t = impl_->tileAt(east, north);
+GroundSample SimWorld::sample(double east, double north) const { return sampleSeenFrom(east, north, Impl::kAllLevels); }
+
+int SimWorld::levelOf(int64_t lanelet_id) const {
+  const map::Lanelet* l = lanelet(lanelet_id);
+  if (!l) return Impl::kAllLevels;
+  if (l->road_id >= 0) {
+    const auto it = impl_->road_level.find(l->road_id);
+    return it == impl_->road_level.end() ? 0 : it->second;
+  }
+  const auto it = impl_->node_level.find(l->intersection_id);
+  return it == impl_->node_level.end() ? 0 : it->second;
+}
+
+GroundSample SimWorld::sampleSeenFrom(double east, double north, int level) const {
+  const Tile& t = impl_->tileAt(east, north, level);
   const double res = impl_->options.tile_resolution_m;
   const int c = std::clamp(static_cast<int>(std::floor((east - t.x0) / res)), 0, t.n - 1);
   const int r = std::clamp(static_cast<int>(std::floor((north - t.y0) / res)), 0, t.n - 1);

@@ -11,6 +11,7 @@
 
 #include <atomic>
 #include <future>
+#include <limits>
 #include <mutex>
 #include <unordered_map>
 
@@ -107,22 +108,43 @@ struct SimWorld::Impl {
   std::vector<detail::CrownQuad> quads;
   std::vector<std::vector<Eigen::Vector2d>> flat_polygons;  // intersections: no crown, no curb
   std::unordered_map<int64_t, std::vector<uint32_t>> fills_by_tile, quads_by_tile, flat_by_tile;
+  // OSM levels (WorldOptions::osm_layers): the distinct levels of each tile's fills (ascending;
+  // tiles of one level are not listed), and each road's and intersection's level.
+  std::unordered_map<int64_t, std::vector<int>> levels_by_tile;
+  std::unordered_map<int64_t, int> road_level, node_level;
+  static constexpr int kAllLevels = std::numeric_limits<int>::max();  // seen from above: every level
+  // The level a tile is drawn for when seen from `view`: kAllLevels for a tile of one level or
+  // seen from its top level or above, else the highest of its levels at or under `view` (its
+  // lowest when none is).
+  int tileLevel(int64_t key, int view) const;
 
   // Tile cache.
   struct Entry {
     std::shared_future<std::shared_ptr<const detail::Tile>> tile;
     uint64_t last_use = 0;
   };
+  struct CacheKey {
+    int64_t xy = 0;
+    int level = kAllLevels;
+    bool operator==(const CacheKey& o) const { return xy == o.xy && level == o.level; }
+  };
+  struct CacheKeyHash {
+    size_t operator()(const CacheKey& k) const {
+      return std::hash<int64_t>()(k.xy) ^ (std::hash<int>()(k.level) * 0x9E3779B97F4A7C15ULL);
+    }
+  };
   mutable std::mutex mutex;
-  mutable std::unordered_map<int64_t, Entry> cache;
+  mutable std::unordered_map<CacheKey, Entry, CacheKeyHash> cache;
   mutable uint64_t clock = 0;
   uint64_t uid = 0;
 
   int64_t tileKey(int64_t ix, int64_t iy) const { return (ix << 32) ^ (iy & 0xffffffffLL); }
   int64_t tileKeyAt(double east, double north, int64_t* ix = nullptr, int64_t* iy = nullptr) const;
-  const detail::Tile& tileAt(double east, double north) const;  // thread-safe
-  std::shared_ptr<const detail::Tile> fetchTile(int64_t key, int64_t ix, int64_t iy) const;
-  std::shared_ptr<const detail::Tile> buildTile(int64_t ix, int64_t iy) const;
+  // The tile at a point as seen from level `view` (tileLevel); thread-safe.
+  const detail::Tile& tileAt(double east, double north, int view = kAllLevels) const;
+  std::shared_ptr<const detail::Tile> fetchTile(int64_t key, int64_t ix, int64_t iy, int level) const;
+  // Fills of a level above `level` are left out (kAllLevels: none).
+  std::shared_ptr<const detail::Tile> buildTile(int64_t ix, int64_t iy, int level) const;
   // Indexes the scene by tile and builds the lookup tables; call once after building.
   void finalize();
 };

@@ -1,8 +1,10 @@
 // Roads on different OSM levels in the simulator's one-ground world (WorldOptions::osm_layers): a
-// bridge (layer=1) over a street, a tunnel (layer=-1) under it. Where they cross, the upper road's
-// surface and paint lie over the lower one's: along the bridge's lanes nothing of the street shows
-// (no kerb, no line, no lane of it), where, with every road on one level, the street's kerbs cut
-// across the bridge's lanes; and nothing of the tunnel shows on the street.
+// bridge (layer=1) over a street, a tunnel (layer=-1) under it. Seen from above (sample()) and
+// from the bridge, where they cross the upper road's surface and paint lie over the lower one's:
+// along the bridge's lanes nothing of the street shows (no kerb, no line, no lane of it), where,
+// with every road on one level, the street's kerbs cut across the bridge's lanes; nothing of the
+// tunnel shows on the street. Seen from the street (what the simulator renders for a car on it,
+// WorldSeenFromLevel), the bridge above is not on its ground: its lanes run on under it.
 #include "core/osm/osm_data.h"
 #include "core/sim/world_builder.h"
 #include "core/skeleton/skeleton.h"
@@ -70,10 +72,11 @@ struct Seen {
   std::set<Surface> surfaces;
   std::set<int64_t> ways;
 };
-Seen along(const SimWorld& w, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+Seen along(const SimWorld& sw, const Eigen::Vector2d& a, const Eigen::Vector2d& b, const World* view = nullptr) {
+  const World& w = view ? *view : sw;
   Seen seen;
   std::map<int64_t, int64_t> road_of_lanelet;
-  for (const auto& l : w.truth().lanelets) road_of_lanelet[l.id] = l.road_id;
+  for (const auto& l : sw.truth().lanelets) road_of_lanelet[l.id] = l.road_id;
   const int n = static_cast<int>((b - a).norm() / 0.05);
   for (int k = 0; k <= n; ++k) {
     const Eigen::Vector2d p = a + (b - a) * k / n;
@@ -112,6 +115,29 @@ TEST(WorldLayers, TheUpperRoadIsPaintedOverTheLowerWhereTheyCross) {
     EXPECT_FALSE(on.surfaces.count(Surface::kCurb)) << "a kerb across the street's lane at x " << x;
     EXPECT_EQ(on.ways, std::set<int64_t>{200});
     EXPECT_TRUE(along(*flat, {x, 50.0}, {x, 70.0}).surfaces.count(Surface::kCurb));
+  }
+  // The levels of the roads' lanelets, and the ground as seen from each road's level.
+  std::map<int64_t, std::set<int>> levels;
+  for (const auto& l : layered->truth().lanelets) {
+    if (l.road_id >= 0) levels[crossing().way_of_road.at(l.road_id)].insert(layered->levelOf(l.id));
+  }
+  EXPECT_EQ(levels[100], std::set<int>{1});
+  EXPECT_EQ(levels[200], std::set<int>{0});
+  EXPECT_EQ(levels[300], std::set<int>{-1});
+  const WorldSeenFromLevel from_street(*layered, 0), from_bridge(*layered, 1), from_tunnel(*layered, -1);
+  for (double x : {-1.5, 1.5}) {
+    const Seen under = along(*layered, {x, -12.0}, {x, 12.0}, &from_street);
+    EXPECT_FALSE(under.surfaces.count(Surface::kCurb)) << "the bridge's kerb on the street's lane at x " << x;
+    EXPECT_EQ(under.ways, std::set<int64_t>{200}) << "the street's lane under the bridge at x " << x;
+    EXPECT_TRUE(along(*layered, {x, -12.0}, {x, 12.0}).ways.count(100)) << "from above the bridge covers the street";
+  }
+  for (double y : {-1.5, 1.5}) {
+    const Seen on = along(*layered, {-12.0, y}, {12.0, y}, &from_bridge);
+    EXPECT_EQ(on.ways, std::set<int64_t>{100});
+    EXPECT_FALSE(on.surfaces.count(Surface::kCurb));
+    const Seen in = along(*layered, {-12.0, 60.0 + y}, {12.0, 60.0 + y}, &from_tunnel);
+    EXPECT_EQ(in.ways, std::set<int64_t>{300}) << "the tunnel's lane under the street at y " << 60.0 + y;
+    EXPECT_FALSE(in.surfaces.count(Surface::kCurb));
   }
   // Away from the crossings every road is as it was.
   for (const auto& [a, b] : {std::pair<Eigen::Vector2d, Eigen::Vector2d>{{-100.0, -1.5}, {-60.0, -1.5}},

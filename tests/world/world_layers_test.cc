@@ -38,6 +38,7 @@ std::string crossingOsm() {
   const int b0 = node(-150, 0), b1 = node(150, 0);
   const int s0 = node(0, -150), s1 = node(0, 150);
   const int t0 = node(-150, 60), t1 = node(150, 60);
+  const int r1 = node(300, 0), r2 = node(150, -100);  // ground roads from the bridge's east end
   auto way = [&](int wid, int a, int b, const std::string& extra) {
     o << "  <way id=\"" << wid << "\">\n    <nd ref=\"" << a << "\"/>\n    <nd ref=\"" << b << "\"/>\n"
       << "    <tag k=\"highway\" v=\"secondary\"/>\n    <tag k=\"lanes\" v=\"2\"/>\n" << extra << "  </way>\n";
@@ -45,6 +46,8 @@ std::string crossingOsm() {
   way(100, b0, b1, "    <tag k=\"bridge\" v=\"yes\"/>\n    <tag k=\"layer\" v=\"1\"/>\n");
   way(200, s0, s1, "");
   way(300, t0, t1, "    <tag k=\"tunnel\" v=\"yes\"/>\n");  // no layer tag: a tunnel is level -1
+  way(400, b1, r1, "");  // the bridge comes down at its east end (node b1) onto two ground roads:
+  way(500, b1, r2, "");  // b1 is a junction of levels 1 and 0
   o << "</osm>\n";
   return o.str();
 }
@@ -52,6 +55,7 @@ std::string crossingOsm() {
 struct Crossing {
   skeleton::Skeleton sk;
   std::map<int64_t, int64_t> way_of_road;
+  Eigen::Vector2d offset = Eigen::Vector2d::Zero();  // the skeleton's ENU minus the layout's metres
 };
 
 const Crossing& crossing() {
@@ -60,7 +64,10 @@ const Crossing& crossing() {
     const std::string path = tmp.str("crossing.osm");
     std::ofstream(path) << crossingOsm();
     Crossing out{skeleton::Skeleton::build(osm::readOsm(path)), {}};
-    for (const auto& r : out.sk.roads()) out.way_of_road[r.id] = r.way_id;
+    for (const auto& r : out.sk.roads()) {
+      out.way_of_road[r.id] = r.way_id;
+      if (r.way_id == 200 && r.polyline.front().y() < 0) out.offset = r.polyline.front() - Eigen::Vector2d(0.0, -150.0);
+    }
     return out;
   }();
   return c;
@@ -74,12 +81,13 @@ struct Seen {
 };
 Seen along(const SimWorld& sw, const Eigen::Vector2d& a, const Eigen::Vector2d& b, const World* view = nullptr) {
   const World& w = view ? *view : sw;
+  const Eigen::Vector2d o = crossing().offset;
   Seen seen;
   std::map<int64_t, int64_t> road_of_lanelet;
   for (const auto& l : sw.truth().lanelets) road_of_lanelet[l.id] = l.road_id;
   const int n = static_cast<int>((b - a).norm() / 0.05);
   for (int k = 0; k <= n; ++k) {
-    const Eigen::Vector2d p = a + (b - a) * k / n;
+    const Eigen::Vector2d p = o + a + (b - a) * k / n;
     const GroundSample g = w.sample(p.x(), p.y());
     seen.surfaces.insert(g.surface);
     if (g.lanelet >= 0 && road_of_lanelet.count(g.lanelet)) seen.ways.insert(crossing().way_of_road.at(road_of_lanelet.at(g.lanelet)));
@@ -139,6 +147,19 @@ TEST(WorldLayers, TheUpperRoadIsPaintedOverTheLowerWhereTheyCross) {
     EXPECT_EQ(in.ways, std::set<int64_t>{300}) << "the tunnel's lane under the street at y " << 60.0 + y;
     EXPECT_FALSE(in.surfaces.count(Surface::kCurb));
   }
+  // The junction where the bridge comes down (b1, 150 m east) is on its lower road's level: seen
+  // from that road it is there (drivable asphalt around the node), not left out with the bridge.
+  int drivable = 0, total = 0;
+  for (double dx = -3.0; dx <= 3.0; dx += 1.0) {
+    for (double dy = -3.0; dy <= 3.0; dy += 1.0) {
+      const Eigen::Vector2d p = crossing().offset + Eigen::Vector2d(150.0 + dx, dy);
+      const GroundSample g = from_street.sample(p.x(), p.y());
+      drivable += g.surface == Surface::kIntersection || g.surface == Surface::kAsphalt ||
+                  g.surface == Surface::kDashedPaint || g.surface == Surface::kSolidPaint || g.surface == Surface::kStopLinePaint;
+      ++total;
+    }
+  }
+  EXPECT_GE(drivable, total * 9 / 10) << "the bridge's end junction, seen from the ground road it joins";
   // Away from the crossings every road is as it was.
   for (const auto& [a, b] : {std::pair<Eigen::Vector2d, Eigen::Vector2d>{{-100.0, -1.5}, {-60.0, -1.5}},
                              {{1.5, -100.0}, {1.5, -60.0}}, {{-100.0, 61.5}, {-60.0, 61.5}}}) {

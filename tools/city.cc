@@ -39,6 +39,7 @@
 // the store, the logs, the OSM file and lanemap's programs must be at the same paths on every
 // node (a shared filesystem); a partition or account comes from sbatch's environment
 // (SBATCH_PARTITION, SBATCH_ACCOUNT). --slurm-dry-run writes them without submitting.
+#include "core/io/atomic_file.h"
 #include "processes/framework/share_dir.h"
 #include "processes/framework/spawn_logged.h"
 #include "tools/cli_checks.h"
@@ -56,6 +57,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -148,6 +150,27 @@ std::string join(const std::vector<std::string>& args) {
   return s;
 }
 
+// Runs n jobs, at most `jobs` at once: start(i) starts job i (its pid; throws when it cannot),
+// done(i, exit code, seconds it ran) is called as each ends, in the order they end.
+void runJobs(size_t n, int jobs, const std::function<pid_t(size_t)>& start,
+             const std::function<void(size_t, int, double)>& done) {
+  std::map<pid_t, std::pair<size_t, Clock::time_point>> running;
+  auto reap = [&]() {
+    int status = 0;
+    const pid_t pid = waitpid(-1, &status, 0);
+    if (pid < 0) return;
+    const auto [i, t0] = running.at(pid);
+    running.erase(pid);
+    done(i, lanemap::exitCode(status), std::chrono::duration<double>(Clock::now() - t0).count());
+  };
+  for (size_t i = 0; i < n; ++i) {
+    while (static_cast<int>(running.size()) >= jobs) reap();
+    const auto t0 = Clock::now();
+    running[start(i)] = {i, t0};
+  }
+  while (!running.empty()) reap();
+}
+
 // Runs args with their output in `log`; the exit code (-1: could not start).
 int runLogged(const std::vector<std::string>& args, const std::string& log) {
   const pid_t pid = lanemap::spawnLogged(args, log);
@@ -199,8 +222,7 @@ class ShardedFusion {
     fs::create_directories(dir());
     nlohmann::json plan = {{"shards", shards}, {"offsets", offsets}, {"no_align", no_align}, {"projections", nlohmann::json::array()}};
     for (const auto& p : all) plan["projections"].push_back(p.string());
-    std::ofstream(dir() / "plan.json.tmp") << plan.dump(1) << "\n";
-    fs::rename(dir() / "plan.json.tmp", dir() / "plan.json");
+    lanemap::io::writeFileAtomically((dir() / "plan.json").string(), plan.dump(1) + "\n");
     if (!offsets) return;
     auto a = base(plan);
     a.insert(a.end(), {"--drive-offsets", "--offsets-out", (dir() / "offsets.json").string()});
@@ -312,7 +334,7 @@ int main(int argc, char** argv) {
                "--drive-offsets; the default, unless --no-align)")
       ->excludes(no_align)
       ->excludes(no_offsets);
-  auto* shards = app.add_option("--shards", o.shards,
+  app.add_option("--shards", o.shards,
                  "fuse in N shards of roads (each shard's roads aligned, fused and explored apart, N at a time here or as\n"
                  "a Slurm array), then assemble the map: the same map as one process, whatever N")
       ->check(CLI::PositiveNumber);
@@ -470,42 +492,31 @@ int main(int argc, char** argv) {
 
     // 1. Projection, `jobs` drives at once.
     const int jobs = o.jobs > 0 ? o.jobs : std::max(1u, std::thread::hardware_concurrency());
-    std::map<pid_t, size_t> running;
     std::vector<double> seconds(todo.size(), 0.0);
-    std::vector<Clock::time_point> started(todo.size());
     int failed = 0;
-    auto reap = [&]() {
-      int status = 0;
-      const pid_t pid = waitpid(-1, &status, 0);
-      if (pid < 0) return;
-      const size_t i = running.at(pid);
-      running.erase(pid);
-      seconds[i] = std::chrono::duration<double>(Clock::now() - started[i]).count();
+    const auto p0 = Clock::now();
+    runJobs(todo.size(), jobs, [&](size_t i) {
       const std::string partial = todo[i].second.string() + ".partial";
-      if (lanemap::exitCode(status) == 0) {
+      fs::remove_all(partial);
+      fs::create_directories(partial);
+      const pid_t pid = lanemap::spawnLogged(projectArgs(todo[i].first, partial), partial + ".log");
+      if (pid < 0) throw std::runtime_error("cannot start " + offline.string());
+      return pid;
+    }, [&](size_t i, int exit_code, double s) {
+      seconds[i] = s;
+      const std::string partial = todo[i].second.string() + ".partial";
+      if (exit_code == 0) {
         fs::rename(partial + ".log", fs::path(partial) / "project.log");
         fs::rename(partial, todo[i].second);
         std::printf("lanemap-city: projected %s (%.1f s) -> %s\n", todo[i].first.c_str(), seconds[i], todo[i].second.filename().c_str());
       } else {
         ++failed;
         std::fprintf(stderr, "lanemap-city: %s could not be projected (exit %d), not added (%s):\n%s\n", todo[i].first.c_str(),
-                     lanemap::exitCode(status), (partial + ".log").c_str(), tail(partial + ".log").c_str());
+                     exit_code, (partial + ".log").c_str(), tail(partial + ".log").c_str());
         fs::remove_all(partial);
       }
       std::fflush(stdout);
-    };
-    const auto p0 = Clock::now();
-    for (size_t i = 0; i < todo.size(); ++i) {
-      while (static_cast<int>(running.size()) >= jobs) reap();
-      const std::string partial = todo[i].second.string() + ".partial";
-      fs::remove_all(partial);
-      fs::create_directories(partial);
-      started[i] = Clock::now();
-      const pid_t pid = lanemap::spawnLogged(projectArgs(todo[i].first, partial), partial + ".log");
-      if (pid < 0) throw std::runtime_error("cannot start " + offline.string());
-      running[pid] = i;
-    }
-    while (!running.empty()) reap();
+    });
     const double projection_wall = std::chrono::duration<double>(Clock::now() - p0).count();
     double projection_sum = 0.0;
     for (double s : seconds) projection_sum += s;
@@ -523,32 +534,21 @@ int main(int argc, char** argv) {
     if (o.shards > 0) {  // prepare, the shards `jobs` at a time, assemble
       sharded.prepare(all, o.shards, offsets, o.no_align);
       const auto plan = sharded.plan();
-      std::map<pid_t, int> shard_of;
       std::vector<double> shard_s(o.shards, 0.0);
-      std::vector<Clock::time_point> shard_t0(o.shards);
       std::string first_error;
-      auto reap_shard = [&]() {
-        int status = 0;
-        const pid_t pid = waitpid(-1, &status, 0);
-        if (pid < 0) return;
-        const int k = shard_of.at(pid);
-        shard_of.erase(pid);
-        shard_s[k] = std::chrono::duration<double>(Clock::now() - shard_t0[k]).count();
+      runJobs(static_cast<size_t>(o.shards), jobs, [&](size_t k) {
+        fs::remove_all(sharded.partial(static_cast<int>(k)));
+        const pid_t pid = lanemap::spawnLogged(sharded.shardArgs(plan, static_cast<int>(k)), sharded.log(static_cast<int>(k)));
+        if (pid < 0) throw std::runtime_error("cannot start " + offline.string());
+        return pid;
+      }, [&](size_t k, int exit_code, double s) {
+        shard_s[k] = s;
         try {
-          sharded.finishShard(k, lanemap::exitCode(status));
+          sharded.finishShard(static_cast<int>(k), exit_code);
         } catch (const std::exception& e) {
           if (first_error.empty()) first_error = e.what();
         }
-      };
-      for (int k = 0; k < o.shards; ++k) {
-        while (static_cast<int>(shard_of.size()) >= jobs) reap_shard();
-        fs::remove_all(sharded.partial(k));
-        shard_t0[k] = Clock::now();
-        const pid_t pid = lanemap::spawnLogged(sharded.shardArgs(plan, k), sharded.log(k));
-        if (pid < 0) throw std::runtime_error("cannot start " + offline.string());
-        shard_of[pid] = k;
-      }
-      while (!shard_of.empty()) reap_shard();
+      });
       if (!first_error.empty()) throw std::runtime_error(first_error + "\n(the map of the store is as it was)");
       double sum = 0.0;
       for (double v : shard_s) sum += v;

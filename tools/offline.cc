@@ -261,6 +261,14 @@ bev::DriveOffsets readDriveOffsets(const std::string& path, const std::vector<st
   return off;
 }
 
+// Entries with a "road_id" (summary.json's roads, merges, partial roads) in road order, each
+// road's entries in their order: a sharded fusion's summary, whatever the shards' order.
+void sortByRoad(nlohmann::json& entries) {
+  std::stable_sort(entries.begin(), entries.end(), [](const nlohmann::json& a, const nlohmann::json& b) {
+    return a.at("road_id").get<int64_t>() < b.at("road_id").get<int64_t>();
+  });
+}
+
 // "K/N" with 0 <= K < N.
 std::pair<int, int> parseShard(const std::string& text) {
   int k = -1, n = 0;
@@ -448,10 +456,8 @@ class OfflineMapper {
   // takes lanes gives them on to the roads awaiting it, as in one process).
   void finishAssembly(int last_drive) {
     drives_ = std::max(0, last_drive);  // what the roads mapped again now are mapped on
-    std::stable_sort(road_log_.begin(), road_log_.end(),
-                     [](const nlohmann::json& a, const nlohmann::json& b) { return a.at("road_id").get<int64_t>() < b.at("road_id").get<int64_t>(); });
-    std::stable_sort(partial_not_mapped_.begin(), partial_not_mapped_.end(),
-                     [](const nlohmann::json& a, const nlohmann::json& b) { return a.at("road_id").get<int64_t>() < b.at("road_id").get<int64_t>(); });
+    sortByRoad(road_log_);
+    sortByRoad(partial_not_mapped_);
     std::vector<int64_t> ids;
     for (const auto& [id, g] : awaiting_) ids.push_back(id);
     for (int64_t id : ids) {
@@ -928,11 +934,7 @@ int main(int argc, char** argv) {
           for (const auto& e : drives_of_shard.at(d).at("merged")) shard_drives[d].push_back(e);
         }
       }
-      for (auto& merged : shard_drives) {
-        std::stable_sort(merged.begin(), merged.end(), [](const nlohmann::json& a, const nlohmann::json& b) {
-          return a.at("road_id").get<int64_t>() < b.at("road_id").get<int64_t>();
-        });
-      }
+      for (auto& merged : shard_drives) sortByRoad(merged);
     }
     for (size_t d = 0; d < projections.size(); ++d) {
       const nlohmann::json& m = projections[d];

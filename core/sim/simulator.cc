@@ -1,7 +1,5 @@
 #include "core/sim/simulator.h"
 
-#include "core/sim/world_builder.h"
-
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
@@ -74,7 +72,8 @@ class WorkerPool {
 Simulator::Simulator(const World& world, const Trajectory& trajectory, const geo::LocalFrame& frame,
                      const camera::CameraModel& camera, const RenderOptions& render,
                      const std::optional<LidarScannerOptions>& lidar, const SimulatorOptions& options)
-    : world_(world), trajectory_(trajectory), frame_(frame), renderer_(camera, render), options_(options) {
+    : world_(world), sim_world_(dynamic_cast<const SimWorld*>(&world)), trajectory_(trajectory), frame_(frame),
+      renderer_(camera, render), options_(options) {
   if (lidar) scanner_.emplace(*lidar);
 }
 
@@ -100,12 +99,9 @@ PoseMeasurement Simulator::poseAt(double t, PoseNoise& noise, double dt) const {
 
 CameraMeasurement Simulator::cameraAt(double t, int64_t seq) const {
   const VehicleState st = trajectory_.at(t);
-  // A world of several OSM levels is seen from the car's (a bridge over it is not on its ground).
-  const auto* sim_world = dynamic_cast<const SimWorld*>(&world_);
-  const std::optional<WorldSeenFromLevel> view =
-      sim_world ? std::make_optional<WorldSeenFromLevel>(*sim_world, sim_world->levelOf(st.label_lanelet)) : std::nullopt;
-  const RenderedFrame f = renderer_.render(view ? static_cast<const World&>(*view) : world_, st.vehicle_to_enu, st.label_lanelet,
-                                           options_.seed * 1000003ULL + static_cast<uint64_t>(seq));
+  const RenderedFrame f = seenFrom(st.label_lanelet, [&](const World& w) {
+    return renderer_.render(w, st.vehicle_to_enu, st.label_lanelet, options_.seed * 1000003ULL + static_cast<uint64_t>(seq));
+  });
   CameraMeasurement m;
   m.utime = toUtime(options_.start_utime, t);
   m.seq = seq;
@@ -163,14 +159,11 @@ SimulatorCounts Simulator::run(SensorSink& sink, const std::function<void(double
   };
   auto castSweep = [this, t0_abs, sweep_dt](int64_t i) {
     // Seen from the car's OSM level at the sweep's start (as camera frames are).
-    const auto* sim_world = dynamic_cast<const SimWorld*>(&world_);
-    const std::optional<WorldSeenFromLevel> view =
-        sim_world ? std::make_optional<WorldSeenFromLevel>(*sim_world, sim_world->levelOf(trajectory_.at(i * sweep_dt).label_lanelet))
-                  : std::nullopt;
-    return scanner_->cast(
-        view ? static_cast<const World&>(*view) : world_, t0_abs + i * sweep_dt,
-        [this, t0_abs](double t_abs) { return trajectory_.at(t_abs - t0_abs).vehicle_to_enu; },
-        options_.seed * 7777ULL + static_cast<uint64_t>(i));
+    return seenFrom(trajectory_.at(i * sweep_dt).label_lanelet, [&](const World& w) {
+      return scanner_->cast(
+          w, t0_abs + i * sweep_dt, [this, t0_abs](double t_abs) { return trajectory_.at(t_abs - t0_abs).vehicle_to_enu; },
+          options_.seed * 7777ULL + static_cast<uint64_t>(i));
+    });
   };
 
   // With workers, frames and sweeps are started up to 2 per worker ahead of the one emitted.

@@ -11,6 +11,7 @@
 #include "core/sim/drive.h"
 #include "core/sim/lidar_scanner.h"
 #include "core/sim/pose_noise.h"
+#include "core/sim/world_builder.h"
 
 #include <Eigen/Geometry>
 
@@ -87,8 +88,16 @@ class Simulator {
  private:
   PoseMeasurement poseAt(double t, PoseNoise& noise, double dt) const;
   CameraMeasurement cameraAt(double t, int64_t seq) const;
+  // Calls f with the world as a car in `lanelet` sees it: a world of several OSM levels from that
+  // lanelet's level (a bridge over it is not on its ground), any other world as it is.
+  template <typename F>
+  auto seenFrom(int64_t lanelet, F&& f) const {
+    if (!sim_world_) return f(world_);
+    return f(WorldSeenFromLevel(*sim_world_, sim_world_->levelOf(lanelet)));
+  }
 
   const World& world_;
+  const SimWorld* sim_world_ = nullptr;  // world_, when it is the simulator's own
   const Trajectory& trajectory_;
   geo::LocalFrame frame_;
   CameraRenderer renderer_;

@@ -234,7 +234,7 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
     }
   }
   // Direction divider of a two-way road: per divider_bin_m of s, the solid line nearest d = 0
-  // within divider_search_m; bins without one are interpolated, a road without any uses d = 0.
+  // within divider_search_m; bins without one are interpolated (up to divider_reach_m from one), a road without any uses d = 0.
   if (road.two_way) {
     const int bin_rows = std::max(1, static_cast<int>(std::round(o.divider_bin_m / r.res)));
     const int nb = (r.ns + bin_rows - 1) / bin_rows;
@@ -255,16 +255,20 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
     }
     std::vector<int> known;
     for (int b = 0; b < nb; ++b) if (std::isfinite(div[b])) known.push_back(b);
+    // A bin farther than divider_reach_m from every bin with a divider seen uses d = 0: a solid
+    // line painted only near a junction (a centre line turning solid before it, a far edge line)
+    // says little about the middle of a long road.
+    const int reach = o.divider_reach_m > 0 ? static_cast<int>(std::round(o.divider_reach_m / o.divider_bin_m)) : nb;
     for (int b = 0; b < nb; ++b) {
       if (std::isfinite(div[b])) continue;
       if (known.empty()) { div[b] = 0.0; continue; }
       auto it = std::lower_bound(known.begin(), known.end(), b);
-      if (it == known.begin()) div[b] = div[*it];
-      else if (it == known.end()) div[b] = div[known.back()];
-      else {
-        const int a = *(it - 1), c = *it;
-        div[b] = div[a] + (div[c] - div[a]) * (b - a) / double(c - a);
-      }
+      const int before = it == known.begin() ? -1 : *(it - 1), after = it == known.end() ? -1 : *it;
+      const bool near_before = before >= 0 && b - before <= reach, near_after = after >= 0 && after - b <= reach;
+      if (near_before && near_after) div[b] = div[before] + (div[after] - div[before]) * (b - before) / double(after - before);
+      else if (near_before) div[b] = div[before];
+      else if (near_after) div[b] = div[after];
+      else div[b] = 0.0;
     }
     for (int i = 0; i < r.ns; ++i) {
       const double dv = div[i / bin_rows];

@@ -44,6 +44,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("right_hand_traffic", o.right_hand_traffic);
   r.read("divider_search_m", o.divider_search_m);
   r.read("divider_bin_m", o.divider_bin_m);
+  r.read("divider_reach_m", o.divider_reach_m);
   r.read("carriageway_wall_m", o.carriageway_wall_m);
   r.read("kerb_wall_fraction", o.kerb_wall_fraction);
   r.read("unnamed_lanes", o.unnamed_lanes);
@@ -118,7 +119,7 @@ void ExplorerOptions::validate() const {
   need(corridor_half_width_m > footprint_width_m && corridor_half_width_m <= 60, "corridor_half_width_m");
   need(frame_spacing_m > 0.05 && frame_spacing_m <= 5, "frame_spacing_m in (0.05, 5]");
   need(frame_smoothing_m >= 0, "frame_smoothing_m >= 0");
-  need(divider_search_m >= 0 && divider_bin_m > 0, "divider_search_m, divider_bin_m");
+  need(divider_search_m >= 0 && divider_bin_m > 0 && divider_reach_m >= 0, "divider_search_m, divider_bin_m, divider_reach_m");
   need(carriageway_wall_m > 0, "carriageway_wall_m > 0");
   need(kerb_wall_fraction >= 0 && kerb_wall_fraction <= 1, "kerb_wall_fraction in [0, 1]");
   need(lane_width_min_m > 0 && lane_width_max_m >= lane_width_min_m, "0 < lane_width_min_m <= lane_width_max_m");

@@ -52,6 +52,7 @@ struct ExplorerOptions {
   bool right_hand_traffic = true;        // two-way road: our lanes are right of the divider
   double divider_search_m = 3.0;         // look for the direction divider within this of d = 0
   double divider_bin_m = 10.0;           // along s (also the bins of the carriageway search)
+  double divider_reach_m = 20.0;         // a bin with no divider seen takes a seen one's at most this far along s, else d = 0 (0: any distance)
   double carriageway_wall_m = 1.0;       // blocked/curb this wide (most of a bin) ends our carriageway
   double kerb_wall_fraction = 0.7;       // ... so does a kerb seen along this share of a bin's rows
                                          //   (within line_tolerance_m of one column; 0: only walls)

@@ -823,6 +823,41 @@ TEST(Explorer, TwoWayRoadWithAnUnpaintedCentreKeepsItsLeftLane) {
   expectLanes(rep, sc);
 }
 
+// Issue 16, the Karlsruhe world (a human-drawn map): a two-way road, one lane each way, no centre
+// line painted, the oncoming lane seen drivable (the segmentation names it a lane), and a solid
+// line within divider_search_m of the road's line over its last 10 m only (paint at the
+// junction's mouth). That line says nothing of the road 40 m back: beyond divider_reach_m of it
+// the divider is the road's line, and the oncoming lane is not ours there. (With the line's
+// offset carried over the whole road, the oncoming lane was mapped as ours from end to end.)
+// Within the reach the line still counts as the divider: nothing here tells it from one.
+TEST(Explorer, ASolidLineSeenNearTheJunctionIsNoDividerAlongTheWholeRoad) {
+  Scenario sc = straightLanes({3.5}, 70.0, 0.0, true);
+  auto& lines = sc.layout.lines;
+  lines.erase(std::remove_if(lines.begin(), lines.end(), [](const Line& l) { return std::abs(l.d(0)) < 0.2; }),
+              lines.end());
+  lines.push_back({constant(2.6), 57.0, 67.0, Line::kSolid, false});
+  // Both lanes drivable, each its own lane class: a separation line between them, no paint.
+  sc.layout.areas[0].dhi = constant(3.5);
+  lines.push_back({constant(0.0), -1e9, 1e9, Line::kSeparationOnly, true});
+  // The lanes covering station s, as (d of the centre there).
+  const auto lanesAt = [](const Report& rep, double s) {
+    std::vector<double> d;
+    for (const Lane& l : rep.result.lanes) if (l.s_begin <= s && l.s_end >= s) d.push_back(l.centre.d(s));
+    return d;
+  };
+  const Report rep = run(sc);
+  ASSERT_EQ(lanesAt(rep, 20.0).size(), 1u);
+  EXPECT_NEAR(lanesAt(rep, 20.0)[0], -1.75, 0.15);
+  for (double s = 5.0; s < 30.0; s += 5.0) EXPECT_EQ(lanesAt(rep, s).size(), 1u) << "s " << s;
+
+  ExplorerOptions unlimited;
+  unlimited.divider_reach_m = 0.0;  // the line's offset carried over the whole road
+  const Report before = run(sc, 1, unlimited);
+  const auto d = lanesAt(before, 20.0);
+  EXPECT_EQ(std::count_if(d.begin(), d.end(), [](double x) { return x > 0.5; }), 1)
+      << "the case no longer shows what divider_reach_m is for";
+}
+
 // Issue 16, a lane beside the sidewalk whose edge was not seen (the benchmark's Roosevelt links,
 // model labels): two lanes one way, no right edge line or curb labelled, the right lane named
 // drivable in 2 m of every 5 (the rest background: seen from the junction) and 3 m of sidewalk

@@ -101,18 +101,6 @@ Arc arcOf(const BezierConnection& c) {
   return arc;
 }
 
-// The largest curvature of a polyline at its interior points: 1 / the radius of the circle
-// through each point and its two neighbours (what Lanelet2's validator computes on a bound).
-double maxCurvature(const std::vector<Vector2d>& p) {
-  double k = 0.0;
-  for (size_t i = 1; i + 1 < p.size(); ++i) {
-    const Vector2d a = p[i] - p[i - 1], b = p[i + 1] - p[i], c = p[i + 1] - p[i - 1];
-    const double denom = a.norm() * b.norm() * c.norm();
-    if (denom > 1e-12) k = std::max(k, 2.0 * std::abs(cross(a, b)) / denom);
-  }
-  return k;
-}
-
 // Whether the polyline turns one way only (no S bend): its chord then lies on the inner side of it.
 bool turnsOneWay(const std::vector<Vector2d>& p) {
   int sign = 0;
@@ -127,6 +115,16 @@ bool turnsOneWay(const std::vector<Vector2d>& p) {
 }
 
 }  // namespace
+
+double maxCurvature(const std::vector<Vector2d>& p) {
+  double k = 0.0;
+  for (size_t i = 1; i + 1 < p.size(); ++i) {
+    const Vector2d a = p[i] - p[i - 1], b = p[i + 1] - p[i], c = p[i + 1] - p[i - 1];
+    const double denom = a.norm() * b.norm() * c.norm();
+    if (denom > 1e-12) k = std::max(k, 2.0 * std::abs(cross(a, b)) / denom);
+  }
+  return k;
+}
 
 std::vector<Vector2d> connectionPolyline(const Vector2d& p0, const Vector2d& t0_in, const Vector2d& p2,
                                          const Vector2d& t2_in, const CurveOptions& o) {

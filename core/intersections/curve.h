@@ -74,6 +74,10 @@ double headingChange(const Eigen::Vector2d& t_in, const Eigen::Vector2d& t_out);
 map::TurnDirection turnDirection(const Eigen::Vector2d& t_in, const Eigen::Vector2d& t_out,
                                  double straight_max_deg = 40.0);
 
+// The largest curvature of a polyline at its interior points: 1 / the radius of the circle through
+// each point and its two neighbours (what Lanelet2's validator computes on a bound).
+double maxCurvature(const std::vector<Eigen::Vector2d>& p);
+
 // True when two segments of the polyline that are not neighbours cross or touch.
 bool selfIntersects(const std::vector<Eigen::Vector2d>& pts);
 

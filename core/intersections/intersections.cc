@@ -89,8 +89,8 @@ class Builder {
  public:
   Builder(const skeleton::Skeleton& sk, const skeleton::Intersection& in,
           const std::map<int64_t, map::LaneMap>& roads, const IntersectionOptions& o,
-          const std::vector<osm::Restriction>& restrictions, int64_t id_base)
-      : sk_(sk), in_(in), roads_(roads), o_(o), restrictions_(restrictions), next_id_(id_base + 1) {}
+          const std::vector<osm::Restriction>& restrictions, const std::vector<DrivenPassage>& passages, int64_t id_base)
+      : sk_(sk), in_(in), roads_(roads), o_(o), restrictions_(restrictions), passages_(passages), next_id_(id_base + 1) {}
 
   IntersectionResult build() {
     result_.intersection_id = in_.id;
@@ -336,6 +336,7 @@ class Builder {
       std::vector<std::pair<int, int>> pairs;
       if (!uturn && movement == TurnDirection::kStraight) pairs = pairByOffset(a, d);
       if (pairs.empty()) pairs = pairLanes(moves, static_cast<int>(d.lanes.size()), movement, uturn, o_.right_hand_traffic);
+      pairs = withDrivenPairs(a, d, std::move(pairs));
       for (const auto& [i, o] : pairs) {
         if (connect(a, i, d, o, movement, false)) ++connections[i];
       }
@@ -424,10 +425,24 @@ class Builder {
     const BezierConnection curve =
         bezierConnection(from.centre.head<2>(), from.tangent, to.centre.head<2>(), to.tangent, o_.curve);
     // The same construction as the bounds' (connectionPolyline), so the centre stays between them.
-    const std::vector<Vector2d> pts =
+    std::vector<Vector2d> pts =
         connectionPolyline(from.centre.head<2>(), from.tangent, to.centre.head<2>(), to.tangent, o_.curve);
-    const ConnectorBounds bounds = connectorBounds(from.left.head<2>(), from.right.head<2>(), from.tangent,
-                                                   to.left.head<2>(), to.right.head<2>(), to.tangent, o_.curve, &pts);
+    ConnectorBounds bounds = connectorBounds(from.left.head<2>(), from.right.head<2>(), from.tangent,
+                                             to.left.head<2>(), to.right.head<2>(), to.tangent, o_.curve, &pts);
+    // Shaped by the car's paths from this road to that one, where it stays sound.
+    int shaped_by = 0;
+    if (const Displacement* shift = displacementFor(a, d)) {
+      std::vector<Vector2d> c = shift->apply(pts, o_.passage.step_m);
+      ConnectorBounds b{shift->apply(bounds.left, o_.passage.step_m), shift->apply(bounds.right, o_.passage.step_m)};
+      // (no bound tighter than the Bezier's own limit: Lanelet2's validator flags curvature 0.5)
+      const double k_max = o_.curve.min_bound_radius_m > 0.0 ? 1.0 / o_.curve.min_bound_radius_m : INFINITY;
+      if (!selfIntersects(c) && outlineIsSimple(b.left, b.right) && !centreLeavesOutline(c, b.left, b.right) &&
+          maxCurvature(b.left) <= k_max && maxCurvature(b.right) <= k_max) {
+        pts = std::move(c);
+        bounds = std::move(b);
+        shaped_by = shift->passages;
+      }
+    }
     // Heights run linearly in arc length from the in-lane's end to the out-lane's start.
     const auto lift = [](const std::vector<Vector2d>& p, double z0, double z1) {
       std::vector<double> u(p.size(), 0.0);
@@ -456,8 +471,8 @@ class Builder {
     }
     // Two connections side by side between lanes that share their border (toLaneMap) share
     // their border too: the bound of an earlier connection of this intersection with the same ends.
-    const int64_t shared_left = connectorLineBetween(from.left, to.left);
-    const int64_t shared_right = connectorLineBetween(from.right, to.right);
+    const int64_t shared_left = connectorLineBetween(left.points);
+    const int64_t shared_right = connectorLineBetween(right.points);
     left.id = shared_left >= 0 ? shared_left : next_id_++;
     right.id = shared_right >= 0 ? shared_right : next_id_++;
     ll.id = next_id_++;
@@ -479,6 +494,7 @@ class Builder {
     c.turn = ll.turn;
     c.quadratic = curve.quadratic;
     c.orphan = orphan;
+    c.passages = shaped_by;
     result_.connections.push_back(c);
     if (shared_left < 0) result_.map.lines.push_back(std::move(left));
     if (shared_right < 0) result_.map.lines.push_back(std::move(right));
@@ -486,17 +502,110 @@ class Builder {
     return true;
   }
 
-  // The bound of a connection built so far in this intersection that runs from `a` to `b` (its
-  // ends within 5 cm, the writer's node merge distance), or -1.
-  int64_t connectorLineBetween(const Vector3d& a, const Vector3d& b) const {
+  // The bound of a connection built so far in this intersection that runs the way `pts` does: the
+  // same ends, each within 5 cm (the writer's node merge distance), and its middle point (by arc
+  // length) within 10 cm (lines closer are one border drawn twice: lanemap-check's
+  // shared_borders), or -1. (Two bounds between the same ends differ where one connection was
+  // shaped by a passage and the other kept its Bezier.)
+  int64_t connectorLineBetween(const std::vector<Vector3d>& pts) const {
+    if (pts.size() < 2) return -1;
+    const auto middle = [](const std::vector<Vector3d>& p) {
+      std::vector<Vector2d> q;
+      for (const auto& v : p) q.push_back(v.head<2>());
+      return resampleEvenly(q, 3)[1];
+    };
+    const Vector2d mid = middle(pts);
     for (const auto& line : result_.map.lines) {
       if (line.points.size() < 2) continue;
-      if ((line.points.front().head<2>() - a.head<2>()).norm() < 0.05 &&
-          (line.points.back().head<2>() - b.head<2>()).norm() < 0.05) {
+      if ((line.points.front().head<2>() - pts.front().head<2>()).norm() < 0.05 &&
+          (line.points.back().head<2>() - pts.back().head<2>()).norm() < 0.05 && (middle(line.points) - mid).norm() < 0.1) {
         return line.id;
       }
     }
     return -1;
+  }
+
+  // The lanes the car drove from road a to road d (driven_passage.h): per path of that road pair,
+  // its nearest in-lane end and out-lane start, when it passes both within passage.max_offset_m
+  // (drivenCentre) and each at most half as far as the next nearest, with its driven centre
+  // between them. In the passages' fixed order.
+  struct DrivenPair {
+    int in = -1, out = -1;
+    std::vector<Vector2d> centre;
+  };
+  const std::vector<DrivenPair>& drivenPairs(const Approach& a, const Approach& d) {
+    const auto key = std::make_pair(a.road->id, d.road->id);
+    if (auto it = driven_.find(key); it != driven_.end()) return it->second;
+    std::vector<DrivenPair> found;
+    // The lane end the path passes nearest, when it is clearly that one: at most half as far as the
+    // next nearest (a car between two lanes, changing lanes there, says neither); else -1.
+    const auto nearest = [](const std::vector<LaneEnd>& lanes, const std::vector<Vector2d>& path) {
+      int best = -1;
+      double best_d = INFINITY, second_d = INFINITY;
+      for (int k = 0; k < static_cast<int>(lanes.size()); ++k) {
+        const double dist = project(path, lanes[k].centre.head<2>()).distance;
+        if (dist < best_d) {
+          second_d = best_d;
+          best_d = dist;
+          best = k;
+        } else {
+          second_d = std::min(second_d, dist);
+        }
+      }
+      return best_d <= 0.5 * second_d ? best : -1;
+    };
+    for (const auto& p : passages_) {
+      if (p.from_road != a.road->id || p.to_road != d.road->id || p.path.size() < 2) continue;
+      const int i = nearest(a.lanes, p.path), o = nearest(d.lanes, p.path);
+      if (i < 0 || o < 0) continue;
+      auto centre = drivenCentre(p.path, a.lanes[i].centre.head<2>(), d.lanes[o].centre.head<2>(), o_.passage);
+      if (centre) found.push_back({i, o, std::move(*centre)});
+    }
+    return driven_.emplace(key, std::move(found)).first->second;
+  }
+
+  // The displacement of the car's paths from road a to road d from the Bezier of the lanes they
+  // drove, averaged; nullptr when no path of that road pair fits. Cached per road pair.
+  const Displacement* displacementFor(const Approach& a, const Approach& d) {
+    const auto key = std::make_pair(a.road->id, d.road->id);
+    if (auto it = displacement_.find(key); it != displacement_.end()) return it->second ? &*it->second : nullptr;
+    std::vector<Displacement> found;
+    for (const auto& p : drivenPairs(a, d)) {
+      const LaneEnd& from = a.lanes[p.in];
+      const LaneEnd& to = d.lanes[p.out];
+      const auto bezier = connectionPolyline(from.centre.head<2>(), from.tangent, to.centre.head<2>(), to.tangent, o_.curve);
+      found.push_back(displacementBetween(p.centre, bezier, o_.passage));
+    }
+    return displacement_.emplace(key, meanDisplacement(found)).first->second ? &*displacement_.at(key) : nullptr;
+  }
+
+  // The rules' pairs of road a to road d corrected by the lanes the car drove (passage.pairs): the
+  // rules align a movement's lanes on one side; where the car went from lane i to lane o and the
+  // rules pair i with another lane, every pair shifts by that difference (the car showed how the
+  // lanes line up), out of range dropped; then each driven pair is one (its in lane's other pairs
+  // dropped). Unchanged when nothing was driven.
+  std::vector<std::pair<int, int>> withDrivenPairs(const Approach& a, const Approach& d, std::vector<std::pair<int, int>> pairs) {
+    if (!o_.passage.pairs) return pairs;
+    const auto& driven = drivenPairs(a, d);
+    if (driven.empty()) return pairs;
+    const int nout = static_cast<int>(d.lanes.size());
+    const DrivenPair& first = driven.front();
+    const auto rule = std::find_if(pairs.begin(), pairs.end(), [&](const auto& q) { return q.first == first.in; });
+    if (rule != pairs.end() && rule->second != first.out) {
+      const int shift = first.out - rule->second;
+      std::vector<std::pair<int, int>> shifted;
+      for (const auto& [i, o] : pairs) {
+        if (o + shift >= 0 && o + shift < nout) shifted.emplace_back(i, o + shift);
+      }
+      pairs = std::move(shifted);
+    }
+    for (const auto& p : driven) {
+      pairs.erase(std::remove_if(pairs.begin(), pairs.end(), [&](const auto& q) { return q.first == p.in && q.second != p.out; }),
+                  pairs.end());
+      if (std::find(pairs.begin(), pairs.end(), std::make_pair(p.in, p.out)) == pairs.end()) pairs.emplace_back(p.in, p.out);
+    }
+    std::sort(pairs.begin(), pairs.end());
+    return pairs;
   }
 
   const skeleton::Skeleton& sk_;
@@ -504,6 +613,9 @@ class Builder {
   const std::map<int64_t, map::LaneMap>& roads_;
   const IntersectionOptions& o_;
   const std::vector<osm::Restriction>& restrictions_;
+  const std::vector<DrivenPassage>& passages_;
+  std::map<std::pair<int64_t, int64_t>, std::vector<DrivenPair>> driven_;            // by (in road, out road)
+  std::map<std::pair<int64_t, int64_t>, std::optional<Displacement>> displacement_;  // by (in road, out road)
   int64_t next_id_;
   std::vector<Approach> ins_, outs_;
   IntersectionResult result_;
@@ -602,6 +714,8 @@ IntersectionOptions IntersectionOptions::fromYaml(const config::YamlReader& r) {
   r.read("cubic_handle_fraction", o.curve.cubic_handle_fraction);
   r.read("step_m", o.curve.step_m);
   r.read("min_bound_radius_m", o.curve.min_bound_radius_m);
+  r.read("passage_max_offset_m", o.passage.max_offset_m);
+  r.read("passage_pairs", o.passage.pairs);
   r.read("id_base", o.id_base);
   try {
     o.validate();
@@ -629,24 +743,29 @@ void IntersectionOptions::validate() const {
   check(curve.step_m > 0.0, "step_m must be > 0");
   check(curve.min_bound_radius_m >= 0.0, "min_bound_radius_m must be >= 0");
   check(id_base >= 0, "id_base must be >= 0");
+  check(passage.max_offset_m >= 0.0, "passage_max_offset_m must be >= 0");
+  check(passage.samples >= 2, "passage samples must be >= 2");
+  check(passage.smoothing_passes >= 0 && passage.step_m > 0.0, "passage smoothing_passes >= 0 and step_m > 0");
 }
 
 IntersectionResult buildIntersection(const skeleton::Skeleton& skeleton, int64_t intersection_id,
                                      const std::map<int64_t, map::LaneMap>& roads,
                                      const IntersectionOptions& options,
-                                     const std::vector<osm::Restriction>& restrictions) {
+                                     const std::vector<osm::Restriction>& restrictions,
+                                     const std::vector<DrivenPassage>& passages) {
   options.validate();
   const auto& all = skeleton.intersections();
   const auto it = std::find_if(all.begin(), all.end(), [&](const auto& in) { return in.id == intersection_id; });
   if (it == all.end()) throw IntersectionsError("unknown intersection id " + std::to_string(intersection_id));
   const int64_t base = options.id_base > 0 ? options.id_base : kIdBase + 100000 * static_cast<int64_t>(it - all.begin());
-  return Builder(skeleton, *it, roads, options, restrictions, base).build();
+  return Builder(skeleton, *it, roads, options, restrictions, passages, base).build();
 }
 
 std::optional<IntersectionResult> buildJoinedIntersection(const skeleton::Skeleton& skeleton, size_t index,
                                                           const std::map<int64_t, map::LaneMap>& roads,
                                                           const IntersectionOptions& options,
-                                                          const std::vector<osm::Restriction>& restrictions) {
+                                                          const std::vector<osm::Restriction>& restrictions,
+                                                          const std::vector<DrivenPassage>& passages) {
   const auto& in = skeleton.intersections().at(index);
   const auto known = [&](const std::vector<int64_t>& ids) {
     return std::any_of(ids.begin(), ids.end(), [&](int64_t id) { return roads.count(id) > 0; });
@@ -654,7 +773,7 @@ std::optional<IntersectionResult> buildJoinedIntersection(const skeleton::Skelet
   if (!known(in.incoming) || !known(in.outgoing)) return std::nullopt;
   IntersectionOptions o = options;
   o.id_base = 0;  // per intersection
-  IntersectionResult r = buildIntersection(skeleton, in.id, roads, o, restrictions);
+  IntersectionResult r = buildIntersection(skeleton, in.id, roads, o, restrictions, passages);
   if (r.connections.empty()) return std::nullopt;
   return r;
 }

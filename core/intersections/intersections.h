@@ -16,16 +16,25 @@
 //   do what, when its count matches the lanes found (turn pockets found in the lanes, which OSM
 //   does not list, are set aside first); a turn pocket with no tag is a turn lane (inner side:
 //   the turn across traffic, outer side: the other);
+// - where the car drove from the in road to the out road (passages: driven_passage.h), the lanes
+//   it drove correct the rules of that road pair: the rules' pairs shift by the difference between
+//   the driven out lane and the one the rules give the driven in lane, and the driven pair is one
+//   (passage.pairs);
 // - a lane left with no connection continues into the straightest allowed way out (a lane drop
 //   merges rather than ending in the middle of the intersection), when every way out of the
 //   intersection is in the map (otherwise it may be headed for a road the drive did not map).
 // Geometry: quadratic Bezier P0 -> P2 with P the tangents' intersection, cubic fallback (curve.h);
 // bounds: each its own connection curve from the incoming lane's bound end to the outgoing lane's
 // bound start (connectorBounds in curve.h), so end points are exactly the road lanelets' bound end
-// points (successors share end points, as Lanelet2 requires); typed virtual.
+// points (successors share end points, as Lanelet2 requires); typed virtual. Where the car drove
+// from the in road to the out road (passages: driven_passage.h), every connection of that road
+// pair, centre and bounds, is moved by the displacement of the car's path from the Bezier of the
+// lanes it drove (ends unchanged); a shaped lanelet that would not be sound (its outline not
+// simple, its centre leaving it) keeps the Bezier.
 #pragma once
 
 #include "core/intersections/curve.h"
+#include "core/intersections/driven_passage.h"
 #include "core/map/lane_map.h"
 #include "core/osm/osm_data.h"
 #include "core/osm/turn_lanes.h"
@@ -72,6 +81,7 @@ struct IntersectionOptions {
   // pair by their offsets from the roads' lines, within this (0: always k -> k from the left).
   double offset_match_m = 1.5;
   CurveOptions curve;
+  PassageOptions passage;  // the car's paths through the intersection (passage_max_offset_m)
   // Ids of the fragment: id_base + 1, + 2, ... ; 0 = kIdBase + 100000 * (index of the
   // intersection in skeleton.intersections()), clear of core/lanes' (road_id + 1) * 100000 + k.
   int64_t id_base = 0;
@@ -111,6 +121,7 @@ struct Connection {
   map::TurnDirection turn = map::TurnDirection::kNone;      // the lanelet's own heading change
   bool quadratic = false;               // false: cubic fallback
   bool orphan = false;                  // added by connect_orphan_lanes
+  int passages = 0;                     // driven passages that shaped it (0: the Bezier)
 };
 
 struct IntersectionResult {
@@ -131,12 +142,14 @@ struct IntersectionResult {
 // One intersection. `roads`: road id -> that road's lanes (map::LaneMap as core/lanes'
 // toLaneMap makes it, or a map's road lanelets grouped with roadsOf); roads absent from it, or
 // with no lanelet reaching the intersection, take no part. `restrictions`: the OSM file's turn
-// restrictions (osm::OsmData::restrictions; the skeleton does not keep them). Deterministic.
+// restrictions (osm::OsmData::restrictions; the skeleton does not keep them). `passages`: the car's
+// paths through intersections (those of other intersections are ignored). Deterministic.
 // Throws IntersectionsError for an unknown intersection id or bad options.
 IntersectionResult buildIntersection(const skeleton::Skeleton& skeleton, int64_t intersection_id,
                                      const std::map<int64_t, map::LaneMap>& roads,
                                      const IntersectionOptions& options = {},
-                                     const std::vector<osm::Restriction>& restrictions = {});
+                                     const std::vector<osm::Restriction>& restrictions = {},
+                                     const std::vector<DrivenPassage>& passages = {});
 
 // The intersection at skeleton.intersections()[index] as buildIntersections builds it (ids from
 // its own base): nullopt when it has no incoming or no outgoing road in `roads`, or when it
@@ -145,7 +158,8 @@ IntersectionResult buildIntersection(const skeleton::Skeleton& skeleton, int64_t
 std::optional<IntersectionResult> buildJoinedIntersection(const skeleton::Skeleton& skeleton, size_t index,
                                                           const std::map<int64_t, map::LaneMap>& roads,
                                                           const IntersectionOptions& options = {},
-                                                          const std::vector<osm::Restriction>& restrictions = {});
+                                                          const std::vector<osm::Restriction>& restrictions = {},
+                                     const std::vector<DrivenPassage>& passages = {});
 
 // Every intersection with at least one incoming and one outgoing road in `roads`.
 // One intersection whose building throws is left out, named in `failures` when given ("intersection

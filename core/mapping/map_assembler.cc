@@ -1,6 +1,8 @@
 #include "core/mapping/map_assembler.h"
 
+#include <algorithm>
 #include <set>
+#include <tuple>
 #include <utility>
 
 namespace lanemap::mapping {
@@ -22,12 +24,41 @@ void MapAssembler::setRoad(int64_t road_id, map::LaneMap lanes) {
   }
 }
 
+bool MapAssembler::addPassage(intersections::DrivenPassage passage) {
+  const auto* from = skeleton_.road(passage.from_road);
+  const auto* to = skeleton_.road(passage.to_road);
+  if (!from || !to || from->to != to->from || passage.path.size() < 2) return false;
+  const auto it = index_of_intersection_.find(from->to);
+  if (it == index_of_intersection_.end()) return false;
+  passage.intersection_id = from->to;
+  auto& list = passages_[it->second];
+  const auto order = [](const intersections::DrivenPassage& a, const intersections::DrivenPassage& b) {
+    const auto key = [](const intersections::DrivenPassage& p) {
+      return std::make_tuple(p.from_road, p.to_road, p.path.front().x(), p.path.front().y(), p.path.back().x(),
+                             p.path.back().y(), p.path.size());
+    };
+    return key(a) < key(b);
+  };
+  list.insert(std::upper_bound(list.begin(), list.end(), passage, order), std::move(passage));
+  marked_.insert(it->second);
+  return true;
+}
+
+std::vector<intersections::DrivenPassage> MapAssembler::passages() const {
+  std::vector<intersections::DrivenPassage> out;
+  for (const auto& [i, list] : passages_) out.insert(out.end(), list.begin(), list.end());
+  return out;
+}
+
 size_t MapAssembler::update() {
   const size_t n = marked_.size();
   for (const size_t i : marked_) {
     Built b;
     try {
-      b.result = intersections::buildJoinedIntersection(skeleton_, i, roads_, options_, restrictions_);
+      static const std::vector<intersections::DrivenPassage> none;
+      const auto p = passages_.find(i);
+      b.result = intersections::buildJoinedIntersection(skeleton_, i, roads_, options_, restrictions_,
+                                                        p == passages_.end() ? none : p->second);
     } catch (const std::exception& e) {
       b.failure = "intersection " + std::to_string(skeleton_.intersections()[i].id) + ": " + e.what();
     }

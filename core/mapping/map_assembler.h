@@ -37,6 +37,14 @@ class MapAssembler {
   void setRoad(int64_t road_id, map::LaneMap lanes);
   const std::map<int64_t, map::LaneMap>& roads() const { return roads_; }
 
+  // The car's path from one road to the next through their intersection (driven_passage.h): it
+  // shapes that road pair's connections; marks the intersection for update(). Kept in a fixed
+  // order (roads, then the path), so the map is the same whatever order passages come in. One
+  // whose roads do not meet at an intersection is ignored (false).
+  bool addPassage(intersections::DrivenPassage passage);
+  // Every passage added, by intersection (skeleton order), each intersection's in their fixed order.
+  std::vector<intersections::DrivenPassage> passages() const;
+
   // Builds the intersections marked since the last call; returns how many it built (a failure
   // counts). Costs what those intersections cost, whatever the number of roads.
   size_t update();
@@ -62,6 +70,7 @@ class MapAssembler {
   std::map<int64_t, map::LaneMap> roads_;
   std::map<int64_t, size_t> index_of_intersection_;  // intersection id -> index in the skeleton's list
   std::map<size_t, Built> built_;                     // by that index: ordered as the skeleton's list
+  std::map<size_t, std::vector<intersections::DrivenPassage>> passages_;  // by that index
   std::set<size_t> marked_;
 };
 

@@ -37,6 +37,11 @@
 // DIR` takes every shard's roads, carries lanes into the short roads left with none, builds the
 // junctions and writes the map one process would have written.
 //
+// The car's path through each junction it drove (core/tracking/passage_recorder.h, cut from the
+// poses by the road tracker's events) shapes the connections of that road pair and corrects their
+// pairing (core/intersections/driven_passage.h): kept in a projection's projection.json and a
+// shard's shard.json (`passages`), counted in summary.json.
+//
 // The road being driven when a log ends never closed: it is explored on what was driven, as far as
 // the car's last pose (core/mapping/partial_road.h), and its lanelets are tagged partial with that
 // station and the road's length (the map's sidecar and GeoJSON; summary.json roads[].partial). Its
@@ -55,6 +60,7 @@
 #include "core/intersections/regulatory.h"
 #include "core/io/lanelet2.h"
 #include "core/io/lane_map_json.h"
+#include "core/io/passage_json.h"
 #include "core/lanes/stop_lines.h"
 #include "core/io/map_png.h"
 #include "core/io/speed_limits.h"
@@ -67,6 +73,7 @@
 #include "core/osm/osm_data.h"
 #include "core/seg/segmenter.h"
 #include "core/skeleton/skeleton.h"
+#include "core/tracking/passage_recorder.h"
 #include "core/tracking/road_tracker.h"
 #include "core/io/atomic_file.h"
 #include "lanemap/image_t.hpp"
@@ -158,12 +165,17 @@ bool decode(const lcm::LogEvent& ev, T& msg) {
 // so drives projected apart (lanemap-city: on several cores or machines) fuse into the same map.
 constexpr int kProjectionFormat = 1;
 
+
 class DriveProjection {
  public:
   explicit DriveProjection(std::string dir) : dir_(std::move(dir)) {
     fs::create_directories(dir_);
-    manifest_ = {{"lanemap_projection", kProjectionFormat}, {"closed", nlohmann::json::array()}, {"open", nullptr}};
+    manifest_ = {{"lanemap_projection", kProjectionFormat}, {"closed", nlohmann::json::array()}, {"open", nullptr},
+                 {"passages", nlohmann::json::array()}};
   }
+  // The car's path through an intersection (optional in the format: a projection without any maps
+  // its junctions with Bezier curves only).
+  void passage(const intersections::DrivenPassage& p) { manifest_["passages"].push_back(io::passageToJson(p)); }
   void closed(const bev::RoadBev& road) {
     const std::string file = "traversal_" + std::to_string(manifest_["closed"].size()) + ".bev";
     road.grid.save((fs::path(dir_) / file).string());
@@ -324,6 +336,7 @@ class OfflineMapper {
   // when the road closes, merged aligned into what the earlier drives gave (bev::mergeAligned).
   void startDrive() {
     tracker_ = std::make_unique<tracking::RoadTracker>(sk_, c_.tracker.tracker);
+    passages_ = tracking::PassageRecorder{};
     last_position_.reset();
     reach_ = DriveReach{};
     builder_ = std::make_unique<bev::BevBuilder>(sk_, c_.vehicle.camera, bevOptions(o_, c_));
@@ -420,6 +433,9 @@ class OfflineMapper {
     header["roads_failed"] = roads_failed_;
     header["partial_not_mapped"] = partial_not_mapped_;
     header["awaiting_lanes"] = awaiting;
+    nlohmann::json passages = nlohmann::json::array();
+    for (const auto& p : assembler_.passages()) passages.push_back(io::passageToJson(p));
+    header["passages"] = passages;
     header["drives"] = drives;
     io::writeFileAtomically((fs::path(dir) / "shard.json").string(), header.dump(1) + "\n");
   }
@@ -445,6 +461,9 @@ class OfflineMapper {
     for (const auto& e : shard.at("partial_not_mapped")) partial_not_mapped_.push_back(e);
     roads_mapped_ += shard.at("roads_mapped").get<int>();
     roads_failed_ += shard.at("roads_failed").get<int>();
+    if (shard.contains("passages")) {
+      for (const auto& p : shard.at("passages")) assembler_.addPassage(io::passageFromJson(p));
+    }
     for (const auto& id : shard.at("awaiting_lanes")) {
       awaiting_.insert_or_assign(id.get<int64_t>(), bev::BevGrid::load(bev::roadGridPath(o_.out, id.get<int64_t>())));
     }
@@ -489,6 +508,14 @@ class OfflineMapper {
     };
     for (const auto& c : m.at("closed")) {
       if (inShard(c.at("road_id").get<int64_t>())) mapTraversal(traversal(c));
+    }
+    // The car's paths through intersections (a shard keeps those leaving its roads for the
+    // assembly, which builds the junctions). Not moved by the drive's offset: a path is matched
+    // to the lane ends it passes, and its offset from them there is taken off.
+    if (m.contains("passages")) {
+      for (const auto& p : m.at("passages")) {
+        if (inShard(p.at("from_road").get<int64_t>())) assembler_.addPassage(io::passageFromJson(p));
+      }
     }
     if (const auto& open = m.at("open"); !open.is_null() && inShard(open.at("road_id").get<int64_t>())) {
       const auto& p = open.at("last_position");
@@ -561,7 +588,15 @@ class OfflineMapper {
       }
     }
     builder_->addPose(toTimedPose(p));
+    passages_.addPosition(p.position.head<2>());
     for (const auto& e : tracker_->update(toPoseInput(p))) {
+      if (auto passage = passages_.onEvent(e)) {
+        if (projection_) {
+          projection_->passage(*passage);
+        } else {
+          assembler_.addPassage(std::move(*passage));
+        }
+      }
       switch (e.type) {
         case tracking::RoadEventType::kEnteredRoad: builder_->roadEntered(e.road_id, e.utime); break;
         case tracking::RoadEventType::kReachedIntersection: builder_->roadClosed(e.road_id, e.utime); break;
@@ -740,6 +775,7 @@ class OfflineMapper {
   std::unique_ptr<seg::Segmenter> model_;  // null: labels from o_.semantic_channel
   const skeleton::Skeleton& sk_;
   std::unique_ptr<tracking::RoadTracker> tracker_;  // this drive's
+  tracking::PassageRecorder passages_;              // this drive's paths through intersections
   std::unique_ptr<bev::BevBuilder> builder_;        // this drive's
   lanes::ExplorerOptions explorer_;
   mapping::MapAssembler assembler_;
@@ -1028,6 +1064,7 @@ int main(int argc, char** argv) {
                               {"roads_failed", mapper.roadsFailed()}, {"roads", mapper.roadLog()},
                               {"partial_not_mapped", mapper.partialNotMapped()},
                               {"intersections_failed", junction_failures},
+                              {"passages", mapper.assembler().passages().size()},  // the car's paths through junctions
                               {"lanelets", map.lanelets.size()}, {"frames_projected", mapper.framesProjected()},
                               {"stop_lines", std::count_if(map.lines.begin(), map.lines.end(), [](const auto& l) {
                                  return l.type == map::LineType::kStopLine;

@@ -19,6 +19,12 @@
 // once per export_interval_s, the last change always within it and when the process stops
 // (STATUS map_exports, export_ms_max). On start it is written again when a road file is newer.
 //
+// The car's path through each intersection (core/tracking/passage_recorder.h, from POSE and the
+// road tracker's ROAD_EVENT) shapes the connections of the road pair it drove
+// (core/intersections/driven_passage.h), as lanemap-offline's do. Each is kept in the store
+// (<store>/passages/passage_<from>_<to>_<k>.json, atomically) and read back on start, so a restart
+// keeps the junctions' shape (STATUS passages_recorded, passages_loaded).
+//
 // STATUS latency (per road): from the BEV_ROAD message's receive time (lcm::ReceiveBuffer::recv_utime)
 // to its LANE_MAP published: the wait behind other roads, loading the grid, lane exploration and
 // (export_interval_s 0) rewriting lane_map.osm. map_road_ms_max: exploring one road, writing its
@@ -32,6 +38,7 @@
 #include "core/io/store_lock.h"
 #include "core/intersections/regulatory.h"
 #include "core/io/lanelet2.h"
+#include "core/io/passage_json.h"
 #include "core/io/speed_limits.h"
 #include "core/lanes/explorer.h"
 #include "core/lanes/stop_lines.h"
@@ -40,10 +47,14 @@
 #include "core/mapping/partial_road.h"
 #include "core/mapping/road_lanes.h"
 #include "core/skeleton/skeleton.h"
+#include "core/tracking/passage_recorder.h"
 #include "lanemap/bev_road_t.hpp"
 #include "lanemap/lane_map_t.hpp"
+#include "lanemap/pose_t.hpp"
+#include "lanemap/road_event_t.hpp"
 #include "processes/framework/channels.h"
 #include "processes/framework/lane_map_message.h"
+#include "processes/framework/pose_conversion.h"
 #include "processes/framework/process.h"
 #include "processes/framework/process_configs.h"
 #include <algorithm>
@@ -83,6 +94,8 @@ class LaneMapperApp {
     // announced between the two is then queued twice (mapped once: onBevRoad), never missed.
     auto* sub = process_.lcm().subscribe(channel, &LaneMapperApp::onBevRoad, this);
     sub->setQueueCapacity(queue);
+    process_.lcm().subscribe(channels::kPose, &LaneMapperApp::onPose, this)->setQueueCapacity(kPoseQueue);
+    process_.lcm().subscribe(channels::kRoadEvent, &LaneMapperApp::onRoadEvent, this)->setQueueCapacity(kRoadEventQueue);
     catchUp();
     worker_ = std::thread([this] { work(); });
     process_.setIdleCheck([this] {  // process replay: wait for the worker after each input
@@ -108,6 +121,55 @@ class LaneMapperApp {
   }
 
  private:
+  static constexpr int kPoseQueue = 1000;     // POSE comes at up to 100 Hz
+  static constexpr int kRoadEventQueue = 100;
+
+  // The car's positions and the road tracker's events: each completed passage shapes its
+  // intersection (rebuilt with the next road mapped there, or the next export) and is stored.
+  void onPose(const lcm::ReceiveBuffer*, const std::string&, const pose_t* msg) {
+    passage_recorder_.addPosition(toEnuPose(*msg, sk_->frame()).position.head<2>());
+  }
+  void onRoadEvent(const lcm::ReceiveBuffer*, const std::string&, const road_event_t* msg) {
+    tracking::RoadEvent e;
+    e.type = static_cast<tracking::RoadEventType>(msg->type);
+    e.utime = msg->utime;
+    e.road_id = msg->road_id;
+    e.from_node = msg->from_node;
+    e.to_node = msg->to_node;
+    e.previous_road_id = msg->previous_road_id;
+    e.intersection_id = msg->intersection_id;
+    auto passage = passage_recorder_.onEvent(e);
+    if (!passage) return;
+    const std::string file = passageFile(passage->from_road, passage->to_road);
+    try {
+      io::writePassageJson(*passage, file);
+    } catch (const std::exception& ex) {
+      std::cerr << "lane_mapper: writing " << file << ": " << ex.what() << " (the junction is still shaped by it)\n";
+    }
+    bool added = false;
+    {
+      std::lock_guard<std::mutex> lock(roads_mutex_);
+      added = assembler_->addPassage(std::move(*passage));
+    }
+    if (!added) return;
+    process_.counters().add("passages_recorded");
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      export_pending_ = true;
+    }
+    cv_.notify_one();
+  }
+  // A new file for a passage from road `from` to road `to`: the next free number.
+  std::string passageFile(int64_t from, int64_t to) {
+    const fs::path dir = fs::path(store_) / "passages";
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    for (int k = 0;; ++k) {
+      const fs::path f = dir / ("passage_" + std::to_string(from) + "_" + std::to_string(to) + "_" + std::to_string(k) + ".json");
+      if (!fs::exists(f, ec)) return f.string();
+    }
+  }
+
   void onBevRoad(const lcm::ReceiveBuffer* rbuf, const std::string&, const bev_road_t* msg) {
     process_.counters().add("bev_roads_received");
     {
@@ -130,11 +192,12 @@ class LaneMapperApp {
         const auto ready = [this] { return stop_ || !jobs_.empty(); };
         if (export_pending_) {
           cv_.wait_until(lock, last_export_ + export_interval_, ready);
-        } else {
-          cv_.wait(lock, ready);
+        } else {  // also woken by a change with no road to map (a driven passage shaped a junction)
+          cv_.wait(lock, [&] { return ready() || export_pending_; });
         }
         if (stop_) return;
         if (jobs_.empty()) {  // the export interval is over: the changes since are written
+          if (!export_pending_ || Clock::now() < last_export_ + export_interval_) continue;  // not yet: wait for it
           busy_ = true;
           lock.unlock();
           exportOrSay();
@@ -305,6 +368,21 @@ class LaneMapperApp {
         std::cerr << "lane_mapper: skipping " << path << ": " << e.what() << "\n";
       }
     }
+    const fs::path passages = fs::path(store_) / "passages";
+    if (fs::is_directory(passages, ec)) {
+      std::vector<fs::path> files;
+      for (const auto& e : fs::directory_iterator(passages, ec)) {
+        if (e.path().extension() == ".json" && e.path().filename().string().rfind("passage_", 0) == 0) files.push_back(e.path());
+      }
+      std::sort(files.begin(), files.end());
+      for (const auto& f : files) {
+        try {
+          if (assembler_->addPassage(io::readPassageJson(f.string()))) process_.counters().add("passages_loaded");
+        } catch (const std::exception& e) {
+          std::cerr << "lane_mapper: skipping " << f.string() << ": " << e.what() << "\n";
+        }
+      }
+    }
     assembler_->update();
     for (const auto& [id, m] : assembler_->roads()) publish(id, m, geo::wallUtime());
   }
@@ -369,6 +447,7 @@ class LaneMapperApp {
   bool export_pending_ = false;      // roads changed since lane_map.osm was written (under mutex_)
   std::unique_ptr<mapping::MapAssembler> assembler_;  // every road's lanes, the intersections as built (under roads_mutex_)
   std::unordered_map<int64_t, intersections::ControlNode> controls_;  // set before spin()
+  tracking::PassageRecorder passage_recorder_;  // LCM thread only
 
  public:
   void setControls(std::unordered_map<int64_t, intersections::ControlNode> c) { controls_ = std::move(c); }

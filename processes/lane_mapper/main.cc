@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
     if (store.empty()) throw std::runtime_error("no map store: give --store or `store:` in the config");
     const lanemap::io::StoreLock lock(store, "lane_mapper");  // one lane mapper per store; a read-only store fails here
     const int stale = lanemap::io::removeStaleTemporaries((fs::path(store) / "lanes").string()) +
+                      lanemap::io::removeStaleTemporaries((fs::path(store) / "passages").string()) +
                       lanemap::io::removeStaleTemporaries(store);
     if (stale > 0) std::cerr << "lane_mapper: removed " << stale << " temporaries a killed writer left in " << store << "\n";
     const lanemap::osm::OsmData osm_data = lanemap::osm::readOsm(osm);

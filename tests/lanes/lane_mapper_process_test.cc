@@ -12,6 +12,8 @@
 #include "core/skeleton/skeleton.h"
 #include "lanemap/bev_road_t.hpp"
 #include "lanemap/lane_map_t.hpp"
+#include "lanemap/pose_t.hpp"
+#include "lanemap/road_event_t.hpp"
 #include "lanemap/status_t.hpp"
 #include "tests/common/child_process.h"
 #include "tests/common/netns.h"
@@ -444,6 +446,87 @@ TEST(LaneMapperProcess, AShortRoadMappedWithNoLaneTakesTheLanesOfTheRoadAfterOnc
   // In the store: the link's file holds them.
   const auto& o = sk.frame().origin();
   EXPECT_EQ(io::readLanelet2(store + "/lanes/road_" + std::to_string(link->id) + ".osm", o.lat, o.lon).lanelets.size(), 2u);
+}
+
+// The car's path through a junction (core/tracking/passage_recorder.h): the lane mapper cuts it
+// from POSE by the road tracker's ROAD_EVENT (reached the end of road A, entered road B from A),
+// keeps it in the store (<store>/passages/) and reads it back after a restart (STATUS
+// passages_recorded, passages_loaded). Events that do not follow on (B entered from another road)
+// record nothing.
+TEST(LaneMapperProcess, RecordsTheCarsPathThroughAJunctionAndKeepsItAcrossARestart) {
+  if (!lanemap::testing::inPrivateNetns()) {
+    ASSERT_EQ(lanemap::testing::rerunInPrivateNetns(), 0);
+    return;
+  }
+  const skeleton::Skeleton sk = skeleton::Skeleton::build(osm::readOsm(kOsm));
+  // Two roads meeting at an intersection, not each other's reverse.
+  const skeleton::AtomicRoad *a = nullptr, *b = nullptr;
+  for (const auto& r : sk.roads()) {
+    for (const auto& q : sk.roads()) {
+      if (!a && r.to == q.from && q.id != r.reverse_id && r.length > 40 && q.length > 40) {
+        a = &r;
+        b = &q;
+      }
+    }
+  }
+  ASSERT_TRUE(a && b);
+  lanemap::testing::TempDir tmp("lane-mapper-passage");
+  const std::string store = tmp.str("store");
+  const std::string url = lanemap::testing::testUdpmUrl(7687);
+  lcm::LCM lcm(url);
+  ASSERT_TRUE(lcm.good());
+  Collector c(lcm);
+  int64_t utime = 1000000;
+  const auto pose = [&](const Eigen::Vector2d& p) {
+    pose_t m{};
+    m.utime = (utime += 40000);
+    const auto ll = sk.frame().toWgs84(Eigen::Vector3d(p.x(), p.y(), 0.0));
+    m.latitude = ll.lat;
+    m.longitude = ll.lon;
+    m.orientation[0] = 1.0;
+    m.status = pose_t::STATUS_SIMULATED;
+    lcm.publish("POSE", &m);
+  };
+  const auto event = [&](int8_t type, int64_t road, int64_t previous) {
+    road_event_t e{};
+    e.utime = utime;
+    e.type = type;
+    e.road_id = road;
+    e.previous_road_id = previous;
+    e.intersection_id = a->to;
+    lcm.publish("ROAD_EVENT", &e);
+  };
+  // Along A's last 30 m to its end, then B's first 30 m: every 0.5 m.
+  const auto drive = [&](int64_t previous_of_b) {
+    for (double s = a->length - 30.0; s <= a->length; s += 0.5) {
+      pose(sk.pointAt(*a, s));
+      if (std::abs(s - a->s_end) < 0.25) event(road_event_t::TYPE_REACHED_INTERSECTION, a->id, -1);
+    }
+    for (double s = 0.0; s <= 30.0; s += 0.5) pose(sk.pointAt(*b, s));
+    event(road_event_t::TYPE_ENTERED_ROAD, b->id, previous_of_b);
+  };
+  {
+    lanemap::testing::ChildProcess proc({kBinary, "--config", kConfig, "--osm", kOsm, "--store", store, "--lcm-url", url});
+    ASSERT_TRUE(proc.started());
+    ASSERT_TRUE(waitFor(lcm, [&] { return !c.status.empty(); }, 20)) << "no STATUS from lanemap-lane-mapper";
+    drive(/*previous_of_b=*/-7);  // entered from another road: nothing
+    drive(a->id);
+    ASSERT_TRUE(waitFor(lcm, [&] { return statusCounter(c.status.back(), "passages_recorded") == 1; }, 10));
+    EXPECT_GE(proc.stop(), 0);
+  }
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(store + "/passages")) files.push_back(e.path());
+  ASSERT_EQ(files.size(), 1u);
+  EXPECT_EQ(files[0].filename().string(), "passage_" + std::to_string(a->id) + "_" + std::to_string(b->id) + "_0.json");
+  const std::string text = lanemap::testing::readFile(files[0].string());
+  EXPECT_NE(text.find("\"from_road\":" + std::to_string(a->id)), std::string::npos) << text.substr(0, 200);
+  c.status.clear();
+  {
+    lanemap::testing::ChildProcess proc({kBinary, "--config", kConfig, "--osm", kOsm, "--store", store, "--lcm-url", url});
+    ASSERT_TRUE(proc.started());
+    EXPECT_TRUE(waitFor(lcm, [&] { return !c.status.empty() && statusCounter(c.status.back(), "passages_loaded") == 1; }, 20));
+    EXPECT_GE(proc.stop(), 0);
+  }
 }
 
 TEST(LaneMapperProcess, FailsClearlyWithoutAnOsmFile) {

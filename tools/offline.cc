@@ -165,7 +165,6 @@ bool decode(const lcm::LogEvent& ev, T& msg) {
 // so drives projected apart (lanemap-city: on several cores or machines) fuse into the same map.
 constexpr int kProjectionFormat = 1;
 
-
 class DriveProjection {
  public:
   explicit DriveProjection(std::string dir) : dir_(std::move(dir)) {

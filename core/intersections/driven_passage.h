@@ -8,7 +8,7 @@
 // reached the intersection (the end of the road it came from) until it was on the next road
 // (core/tracking/passage_recorder.h records them from the road tracker's events).
 //
-// Its use (drivenDisplacement): the passage is matched to the lane ends it passes, the in-lane end
+// Its use (drivenCentre, displacementBetween, meanDisplacement): the passage is matched to the lane ends it passes, the in-lane end
 // P0 and the out-lane start P2 each the nearest within max_offset_m; its stretch between the
 // points nearest them, minus the offset at each end taken off linearly in arc length (the car does
 // not drive exactly on a lane's centre line, and a drive's pose offset moves the whole path), runs

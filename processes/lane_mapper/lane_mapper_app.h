@@ -138,20 +138,20 @@ class LaneMapperApp {
     e.to_node = msg->to_node;
     e.previous_road_id = msg->previous_road_id;
     e.intersection_id = msg->intersection_id;
-    auto passage = passage_recorder_.onEvent(e);
+    const auto passage = passage_recorder_.onEvent(e);
     if (!passage) return;
+    bool added = false;
+    {
+      std::lock_guard<std::mutex> lock(roads_mutex_);
+      added = assembler_->addPassage(*passage);
+    }
+    if (!added) return;  // roads that do not meet at an intersection of the skeleton
     const std::string file = passageFile(passage->from_road, passage->to_road);
     try {
       io::writePassageJson(*passage, file);
     } catch (const std::exception& ex) {
       std::cerr << "lane_mapper: writing " << file << ": " << ex.what() << " (the junction is still shaped by it)\n";
     }
-    bool added = false;
-    {
-      std::lock_guard<std::mutex> lock(roads_mutex_);
-      added = assembler_->addPassage(std::move(*passage));
-    }
-    if (!added) return;
     process_.counters().add("passages_recorded");
     {
       std::lock_guard<std::mutex> lock(mutex_);

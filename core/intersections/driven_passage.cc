@@ -65,6 +65,16 @@ std::vector<Vector2d> Displacement::apply(const std::vector<Vector2d>& in, doubl
   return out;
 }
 
+Displacement Displacement::smoothed(int passes) const {
+  Displacement d = *this;
+  std::vector<Vector2d> next = d.at;
+  for (int pass = 0; pass < passes; ++pass) {
+    for (size_t k = 1; k + 1 < d.at.size(); ++k) next[k] = 0.25 * (d.at[k - 1] + 2.0 * d.at[k] + d.at[k + 1]);
+    d.at.swap(next);
+  }
+  return d;
+}
+
 std::vector<Vector2d> resampleEvenly(const std::vector<Vector2d>& line, int n) {
   if (line.empty() || n < 2) return line;
   const std::vector<double> s = arcLengths(line);
@@ -124,11 +134,6 @@ Displacement displacementBetween(const std::vector<Vector2d>& driven, const std:
   d.at.resize(static_cast<size_t>(n), Vector2d::Zero());
   if (static_cast<int>(a.size()) != n || static_cast<int>(b.size()) != n) return d;
   for (int k = 1; k + 1 < n; ++k) d.at[static_cast<size_t>(k)] = a[static_cast<size_t>(k)] - b[static_cast<size_t>(k)];
-  std::vector<Vector2d> next = d.at;
-  for (int pass = 0; pass < o.smoothing_passes; ++pass) {
-    for (size_t k = 1; k + 1 < d.at.size(); ++k) next[k] = 0.25 * (d.at[k - 1] + 2.0 * d.at[k] + d.at[k + 1]);
-    d.at.swap(next);
-  }
   return d;
 }
 

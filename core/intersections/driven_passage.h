@@ -38,9 +38,10 @@ struct DrivenPassage {
 struct PassageOptions {
   double max_offset_m = 1.5;  // a passage belongs to a lane end it passes within this (0: passages unused)
   int samples = 41;           // the displacement is kept at this many u, evenly spaced
-  // ... smoothed by this many passes of a [1 2 1] / 4 filter (ends kept at zero): the poses' noise
-  // would otherwise turn a bound tighter than Lanelet2's validator accepts (curvature 0.5).
-  int smoothing_passes = 20;
+  // Smoothing of the displacement, in passes of a [1 2 1] / 4 filter (ends kept at zero), tried in
+  // this order: a connection takes the first under which it is sound (the poses' noise can turn a
+  // bound tighter than Lanelet2's validator accepts, curvature 0.5), else keeps its Bezier.
+  std::vector<int> smoothing_passes = {0, 5, 20, 80};
   double step_m = 0.5;        // a line is moved at points at most this far apart (a chord gains points)
   bool pairs = true;          // the lanes driven correct the pairing rules of their road pair
 };
@@ -53,6 +54,8 @@ struct Displacement {
   // The polyline with each point moved by the displacement at its own normalised arc length
   // (end points unchanged); a segment longer than step_m first gains points along it.
   std::vector<Eigen::Vector2d> apply(const std::vector<Eigen::Vector2d>& line, double step_m = 0.5) const;
+  // The same after `passes` passes of a [1 2 1] / 4 filter (its ends stay zero).
+  Displacement smoothed(int passes) const;
 };
 
 // The passage's path between the lane ends p0 (in-lane end) and p2 (out-lane start), offsets at the
@@ -62,7 +65,7 @@ std::optional<std::vector<Eigen::Vector2d>> drivenCentre(const std::vector<Eigen
                                                          const Eigen::Vector2d& p2, const PassageOptions& options = {});
 
 // The displacement of `driven` (drivenCentre) from `bezier` (the connection's centre polyline
-// between the same ends), at options.samples values of u, smoothed (options.smoothing_passes).
+// between the same ends), at options.samples values of u.
 Displacement displacementBetween(const std::vector<Eigen::Vector2d>& driven, const std::vector<Eigen::Vector2d>& bezier,
                                  const PassageOptions& options = {});
 

@@ -431,16 +431,20 @@ class Builder {
                                              to.left.head<2>(), to.right.head<2>(), to.tangent, o_.curve, &pts);
     // Shaped by the car's paths from this road to that one, where it stays sound.
     int shaped_by = 0;
-    if (const Displacement* shift = displacementFor(a, d)) {
-      std::vector<Vector2d> c = shift->apply(pts, o_.passage.step_m);
-      ConnectorBounds b{shift->apply(bounds.left, o_.passage.step_m), shift->apply(bounds.right, o_.passage.step_m)};
+    if (const Displacement* raw = displacementFor(a, d)) {
       // (no bound tighter than the Bezier's own limit: Lanelet2's validator flags curvature 0.5)
       const double k_max = o_.curve.min_bound_radius_m > 0.0 ? 1.0 / o_.curve.min_bound_radius_m : INFINITY;
-      if (!selfIntersects(c) && outlineIsSimple(b.left, b.right) && !centreLeavesOutline(c, b.left, b.right) &&
-          maxCurvature(b.left) <= k_max && maxCurvature(b.right) <= k_max) {
-        pts = std::move(c);
-        bounds = std::move(b);
-        shaped_by = shift->passages;
+      for (const int passes : o_.passage.smoothing_passes) {  // the least smoothing that is sound
+        const Displacement shift = raw->smoothed(passes);
+        std::vector<Vector2d> c = shift.apply(pts, o_.passage.step_m);
+        ConnectorBounds b{shift.apply(bounds.left, o_.passage.step_m), shift.apply(bounds.right, o_.passage.step_m)};
+        if (!selfIntersects(c) && outlineIsSimple(b.left, b.right) && !centreLeavesOutline(c, b.left, b.right) &&
+            maxCurvature(b.left) <= k_max && maxCurvature(b.right) <= k_max) {
+          pts = std::move(c);
+          bounds = std::move(b);
+          shaped_by = raw->passages;
+          break;
+        }
       }
     }
     // Heights run linearly in arc length from the in-lane's end to the out-lane's start.
@@ -745,7 +749,9 @@ void IntersectionOptions::validate() const {
   check(id_base >= 0, "id_base must be >= 0");
   check(passage.max_offset_m >= 0.0, "passage_max_offset_m must be >= 0");
   check(passage.samples >= 2, "passage samples must be >= 2");
-  check(passage.smoothing_passes >= 0 && passage.step_m > 0.0, "passage smoothing_passes >= 0 and step_m > 0");
+  check(std::all_of(passage.smoothing_passes.begin(), passage.smoothing_passes.end(), [](int n) { return n >= 0; }) &&
+            passage.step_m > 0.0,
+        "passage smoothing_passes >= 0 and step_m > 0");
 }
 
 IntersectionResult buildIntersection(const skeleton::Skeleton& skeleton, int64_t intersection_id,

@@ -192,6 +192,34 @@ TEST(DrivenPassage, ARoundaboutDrawnAsOneNodeIsDrivenAround) {
   EXPECT_EQ(other->centre, other_plain->centre);
 }
 
+// Poses are noisy: a path zigzagging 5 cm either side every 0.5 m, taken as it is, turns the
+// bounds tighter than Lanelet2's validator accepts (curvature 0.5). The displacement is smoothed
+// as much as that takes (PassageOptions::smoothing_passes, least first): the connection is still
+// shaped, its bounds within the limit, still along the ring.
+TEST(DrivenPassage, ANoisyPathStillShapesTheConnectionWithinTheCurvatureLimit) {
+  Roundabout t;
+  for (size_t k = 0; k < t.passage.path.size(); ++k) t.passage.path[k] += Vector2d(k % 2 ? 0.05 : -0.05, k % 2 ? -0.05 : 0.05);
+  const int64_t node = t.sk.road(t.in)->to;
+  lanemap::intersections::IntersectionOptions raw;
+  raw.passage.smoothing_passes = {0};  // as the poses are
+  const auto unsmoothed = lanemap::intersections::buildIntersection(t.sk, node, t.roads, raw, {}, {t.passage});
+  int used = -1;
+  ASSERT_TRUE(t.connection(unsmoothed, t.in, t.east, 1, &used));
+  EXPECT_EQ(used, 0) << "the case no longer needs smoothing";
+  const auto shaped = lanemap::intersections::buildIntersection(t.sk, node, t.roads, {}, {}, {t.passage});
+  const auto* driven = t.connection(shaped, t.in, t.east, 1, &used);
+  ASSERT_TRUE(driven);
+  EXPECT_EQ(used, 1);
+  for (const auto id : {driven->left_id, driven->right_id}) {
+    const auto* line = shaped.map.line(id);
+    ASSERT_TRUE(line);
+    EXPECT_LE(lanemap::intersections::maxCurvature(flat(line->points)), 0.5 + 1e-9);
+  }
+  double worst = 0.0;
+  for (const auto& p : driven->centre) worst = std::max(worst, std::abs(p.head<2>().norm() - t.p0.norm()));
+  EXPECT_LT(worst, 0.5);
+}
+
 TEST(DrivenPassage, APathThatPassesNoLaneEndShapesNothing) {
   Roundabout t;
   DrivenPassage far = t.passage;

@@ -1063,7 +1063,7 @@ int main(int argc, char** argv) {
                               {"roads_failed", mapper.roadsFailed()}, {"roads", mapper.roadLog()},
                               {"partial_not_mapped", mapper.partialNotMapped()},
                               {"intersections_failed", junction_failures},
-                              {"passages", mapper.assembler().passages().size()},  // the car's paths through junctions
+                              {"passages", mapper.assembler().passageCount()},  // the car's paths through junctions
                               {"lanelets", map.lanelets.size()}, {"frames_projected", mapper.framesProjected()},
                               {"stop_lines", std::count_if(map.lines.begin(), map.lines.end(), [](const auto& l) {
                                  return l.type == map::LineType::kStopLine;

@@ -141,13 +141,15 @@ std::optional<Displacement> meanDisplacement(const std::vector<Displacement>& ds
   if (ds.empty()) return std::nullopt;
   Displacement m;
   m.at.assign(ds.front().at.size(), Vector2d::Zero());
+  int used = 0;
   for (const auto& d : ds) {
     if (d.at.size() != m.at.size()) continue;
     for (size_t k = 0; k < m.at.size(); ++k) m.at[k] += d.at[k];
-    ++m.passages;
+    ++used;
+    m.passages += d.passages;
   }
-  if (m.passages == 0) return std::nullopt;
-  for (auto& v : m.at) v /= static_cast<double>(m.passages);
+  if (used == 0) return std::nullopt;
+  for (auto& v : m.at) v /= static_cast<double>(used);
   return m;
 }
 

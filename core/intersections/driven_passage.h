@@ -69,7 +69,8 @@ std::optional<std::vector<Eigen::Vector2d>> drivenCentre(const std::vector<Eigen
 Displacement displacementBetween(const std::vector<Eigen::Vector2d>& driven, const std::vector<Eigen::Vector2d>& bezier,
                                  const PassageOptions& options = {});
 
-// Point-wise mean of displacements of the same size (passages summed); empty input: nullopt.
+// Point-wise mean of the displacements of the first one's size (each counted once, their passages
+// summed); nullopt when there is none.
 std::optional<Displacement> meanDisplacement(const std::vector<Displacement>& ds);
 
 // Resamples a polyline at n points evenly spaced in arc length (ends kept).

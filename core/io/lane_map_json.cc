@@ -1,7 +1,7 @@
 #include "core/io/lane_map_json.h"
 
 #include "core/io/atomic_file.h"
-#include "core/io/read_file.h"
+#include "core/io/json_file.h"
 
 namespace lanemap::io {
 
@@ -108,15 +108,7 @@ void writeLaneMapJson(const map::LaneMap& map, const std::string& path) {
 }
 
 map::LaneMap readLaneMapJson(const std::string& path) {
-  const auto text = readFile(path);
-  if (!text) throw IoError("cannot read " + path);
-  const json j = json::parse(*text, nullptr, false);
-  if (j.is_discarded()) throw IoError(path + " is not JSON");
-  try {
-    return laneMapFromJson(j);
-  } catch (const IoError& e) {
-    throw IoError(path + ": " + e.what());
-  }
+  return readJsonFile(path, laneMapFromJson);
 }
 
 }  // namespace lanemap::io

@@ -1,7 +1,7 @@
 #include "core/io/passage_json.h"
 
 #include "core/io/atomic_file.h"
-#include "core/io/read_file.h"
+#include "core/io/json_file.h"
 
 namespace lanemap::io {
 
@@ -33,15 +33,7 @@ void writePassageJson(const intersections::DrivenPassage& passage, const std::st
 }
 
 intersections::DrivenPassage readPassageJson(const std::string& path) {
-  const auto text = readFile(path);
-  if (!text) throw IoError("cannot read " + path);
-  const json j = json::parse(*text, nullptr, false);
-  if (j.is_discarded()) throw IoError(path + " is not JSON");
-  try {
-    return passageFromJson(j);
-  } catch (const IoError& e) {
-    throw IoError(path + ": " + e.what());
-  }
+  return readJsonFile(path, passageFromJson);
 }
 
 }  // namespace lanemap::io

@@ -50,6 +50,12 @@ std::vector<intersections::DrivenPassage> MapAssembler::passages() const {
   return out;
 }
 
+size_t MapAssembler::passageCount() const {
+  size_t n = 0;
+  for (const auto& [i, list] : passages_) n += list.size();
+  return n;
+}
+
 size_t MapAssembler::update() {
   const size_t n = marked_.size();
   for (const size_t i : marked_) {

@@ -44,6 +44,7 @@ class MapAssembler {
   bool addPassage(intersections::DrivenPassage passage);
   // Every passage added, by intersection (skeleton order), each intersection's in their fixed order.
   std::vector<intersections::DrivenPassage> passages() const;
+  size_t passageCount() const;
 
   // Builds the intersections marked since the last call; returns how many it built (a failure
   // counts). Costs what those intersections cost, whatever the number of roads.

@@ -1320,6 +1320,188 @@ void extendPocketsToTheirTaper(const Raster& R, const FrenetFrame& frame, const 
   }
 }
 
+// The far lanes of a wide road lie beyond the segmentation's lane classes (two either side of
+// the ego lane) and are seen obliquely: their ground is drivable but sprayed with stray labels
+// where particles find room only in pieces (dropped: a glimpse is no lane), and their far lines
+// are too sparse for markUnnamedLanes, which needs both of a lane's lines within one bin. But a
+// dashed line only ever separates two lanes of one direction: when the outermost lane (of those
+// over half the explored stretch, at its middle) has a dashed bound on one side, a lane lies beyond
+// it (addLanesBeyondDashedLines). It is added where the strip beyond, one lane wide (that lane's
+// median width; or the distance to a line, paint within a cell of one column in at least 5 % of
+// the rows and twice the median of the columns searched, within half a metre of that width), is
+// observed in at least half its cells, drivable in 30 % (road: not a verge or a shoulder the
+// segmentation calls background), holds no kerb or outside column (in 30 % of a 10 m bin's rows,
+// within line_tolerance_m) in at least 60 % of its bins (beyond a two-way road's divider the
+// raster is outside: none there; a bin beside a junction may hold the gore where a carriageway
+// splits off), and no other lane (a pocket, a piece) runs in it. The lane runs
+// along that lane, its centre line shifted by half of each width, its near bound the other's
+// (shared), its far bound that far beyond, typed by the line found there (virtual if none); no
+// particle supports it (its confidence says so). Repeated while the new outermost lane's far bound
+// is dashed, at most lanes_beyond_dashed lanes in all, the side with the more observed strip first.
+struct BeyondCandidate {
+  bool ok = false;
+  double width = 0.0;       // near bound to far bound
+  double observed = 0.0;    // share of the strip's cells observed (not outside)
+  map::LineType far_type = map::LineType::kVirtual;
+};
+
+BeyondCandidate candidateBeyond(const Raster& R, const ExplorerOptions& o, const Lane& a, int side) {
+  BeyondCandidate c;
+  const Boundary& near = side > 0 ? a.left : a.right;
+  if (near.type != map::LineType::kDashed || near.d.size() < 2) return c;
+  const size_t n = near.d.size();
+  std::vector<double> widths;
+  for (size_t k = 0; k < n; ++k) widths.push_back(a.left.d[k] - a.right.d[k]);
+  std::nth_element(widths.begin(), widths.begin() + n / 2, widths.end());
+  double w = std::clamp(widths[n / 2], o.lane_width_min_m, o.lane_width_max_m);
+  // A line at the far side: the offset from the near bound (within half a metre of that lane's
+  // width, lanes of one road being about as wide) where most rows show paint within a cell.
+  const double half_step = 0.5 * o.waypoint_spacing_m;
+  auto rowsOf = [&](size_t k, int* i0, int* i1) {
+    *i0 = std::max(R.live_i0, R.row(a.waypoint_s[k] - half_step));
+    *i1 = std::min(R.live_i1, R.row(a.waypoint_s[k] + half_step) - 1);
+  };
+  const int lo = static_cast<int>(std::round(std::max(o.lane_width_min_m, w - 0.5) / R.res));
+  const int hi = static_cast<int>(std::round(std::min(o.lane_width_max_m, w + 0.5) / R.res));
+  std::vector<int> line_rows(hi - lo + 1, 0), line_dashed(hi - lo + 1, 0);
+  int rows = 0;
+  for (size_t k = 0; k < n; ++k) {
+    int i0, i1;
+    rowsOf(k, &i0, &i1);
+    const int j_near = R.col(near.d[k]);
+    for (int i = i0; i <= i1; ++i, ++rows) {
+      for (int m = lo; m <= hi; ++m) {
+        bool line = false, dashed = false;
+        for (int dj = -1; dj <= 1; ++dj) {
+          const int j = j_near + side * m + dj;
+          if (j < 0 || j >= R.nd) continue;
+          const uint8_t v = R.at(i, j);
+          line = line || v == kDashed || v == kSolid || v == kSeparation;
+          dashed = dashed || v == kDashed;
+        }
+        line_rows[m - lo] += line;
+        line_dashed[m - lo] += dashed;
+      }
+    }
+  }
+  if (rows == 0) return c;
+  const int best = static_cast<int>(std::max_element(line_rows.begin(), line_rows.end()) - line_rows.begin());
+  std::vector<int> sorted = line_rows;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const bool far_line = line_rows[best] >= 0.05 * rows && line_rows[best] >= 2 * sorted[sorted.size() / 2];
+  if (far_line) {
+    w = (lo + best) * R.res;
+    c.far_type = line_dashed[best] * 2 > line_rows[best] ? map::LineType::kDashed : map::LineType::kSolid;
+  }
+  // The strip: observed, walls, in bins of divider_bin_m.
+  const int tol = std::max(0, static_cast<int>(std::round(o.line_tolerance_m / R.res)));
+  const int inner0 = tol + 1, inner1 = static_cast<int>(std::round(w / R.res)) - tol - 1;
+  if (inner1 <= inner0) return c;
+  const int bin_rows = std::max(1, static_cast<int>(std::round(o.divider_bin_m / R.res)));
+  int64_t cells = 0, observed = 0, drivable = 0;
+  int bins = 0, good_bins = 0;
+  std::vector<int> wall(inner1 - inner0 + 1, 0);
+  int bin_row_count = 0, bin_cells = 0, bin_observed = 0, next_bin = -1;
+  auto closeBin = [&]() {
+    if (bin_row_count == 0) return;
+    ++bins;
+    const bool walled = *std::max_element(wall.begin(), wall.end()) >= 0.3 * bin_row_count;
+    good_bins += !walled && bin_observed >= 0.5 * bin_cells;
+    std::fill(wall.begin(), wall.end(), 0);
+    bin_row_count = bin_cells = bin_observed = 0;
+  };
+  for (size_t k = 0; k < n; ++k) {
+    int i0, i1;
+    rowsOf(k, &i0, &i1);
+    const int j_near = R.col(near.d[k]);
+    for (int i = i0; i <= i1; ++i) {
+      if (i >= next_bin) {
+        closeBin();
+        next_bin = i + bin_rows;
+      }
+      ++bin_row_count;
+      for (int m = inner0 - tol; m <= inner1 + tol; ++m) {
+        const int j = j_near + side * m;
+        const uint8_t v = (j < 0 || j >= R.nd) ? static_cast<uint8_t>(kOutside) : R.at(i, j);
+        const bool is_wall = v == kCurb || v == kOutside;
+        for (int q = std::max(inner0, m - tol); q <= std::min(inner1, m + tol); ++q) wall[q - inner0] += is_wall;
+        if (m < inner0 || m > inner1) continue;
+        ++cells;
+        ++bin_cells;
+        const bool obs = v != kUnobserved && v != kOutside;
+        observed += obs;
+        bin_observed += obs;
+        drivable += v == kDrivable;
+      }
+    }
+  }
+  closeBin();
+  if (cells == 0 || bins == 0) return c;
+  c.width = w;
+  c.observed = static_cast<double>(observed) / cells;
+  c.ok = c.observed >= 0.5 && drivable >= 0.3 * cells && good_bins >= 0.6 * bins;
+  return c;
+}
+
+void addLanesBeyondDashedLines(const Raster& R, const FrenetFrame& frame, const RoadGeometry& road, const ExplorerOptions& o,
+                               std::vector<Lane>* lanes) {
+  const double stretch = road.s_end - road.s_begin;
+  const double sm = 0.5 * (road.s_begin + road.s_end);
+  for (int added = 0; added < o.lanes_beyond_dashed && !lanes->empty(); ++added) {
+    int best_lane = -1, best_side = 0;
+    BeyondCandidate best;
+    for (int side : {1, -1}) {
+      // The outermost lane on this side at the middle, of those over half the stretch.
+      int outer = -1;
+      for (const auto& l : *lanes) {
+        if (l.s_end - l.s_begin < 0.5 * stretch || sm < l.s_begin || sm > l.s_end) continue;
+        if (outer < 0 || side * l.centre.d(sm) > side * (*lanes)[outer].centre.d(sm)) outer = l.id;
+      }
+      if (outer < 0) continue;
+      BeyondCandidate c = candidateBeyond(R, o, (*lanes)[outer], side);
+      // No other lane (a piece of one, a pocket) runs in the strip.
+      const Lane& a = (*lanes)[outer];
+      const Boundary& near = side > 0 ? a.left : a.right;
+      for (size_t k = 0; c.ok && k < a.waypoint_s.size(); ++k) {
+        const double s = a.waypoint_s[k], dc = near.d[k] + side * 0.5 * c.width;
+        for (const auto& l : *lanes) {
+          if (l.id != outer && s >= l.s_begin && s <= l.s_end && std::abs(l.centre.d(s) - dc) < 0.5 * c.width) c.ok = false;
+        }
+      }
+      if (c.ok && (!best.ok || c.observed > best.observed)) {
+        best = c;
+        best_lane = outer;
+        best_side = side;
+      }
+    }
+    if (best_lane < 0) return;
+    const Lane& a = (*lanes)[best_lane];
+    const Boundary& near = best_side > 0 ? a.left : a.right;
+    std::vector<double> half;
+    for (size_t k = 0; k < near.d.size(); ++k) half.push_back(std::abs(near.d[k] - a.centre.d(a.waypoint_s[k])));
+    std::nth_element(half.begin(), half.begin() + half.size() / 2, half.end());
+    Lane lane;
+    lane.s_begin = a.s_begin;
+    lane.s_end = a.s_end;
+    PiecewiseLinearFit fit = a.centre.piecewiseLinear();
+    const double shift = best_side * (half[half.size() / 2] + 0.5 * best.width);
+    for (double& v : fit.values) v += shift;
+    lane.centre = CentreLine(fit, lane.s_begin, lane.s_end);
+    lane.waypoint_s = a.waypoint_s;
+    Boundary far;
+    far.type = best.far_type;
+    for (size_t k = 0; k < a.waypoint_s.size(); ++k) {
+      lane.waypoints.push_back(frame.toEnu(a.waypoint_s[k], lane.centre.d(a.waypoint_s[k])));
+      far.d.push_back(near.d[k] + best_side * best.width);
+      far.points.push_back(frame.toEnu(a.waypoint_s[k], far.d.back()));
+    }
+    lane.left = best_side > 0 ? far : near;
+    lane.right = best_side > 0 ? near : far;
+    lane.id = static_cast<int>(lanes->size());
+    lanes->push_back(std::move(lane));
+  }
+}
+
 // Index from the left among the lanes present at each lane's middle.
 void indexLanesFromLeft(std::vector<Lane>* lanes) {
   for (auto& lane : *lanes) {
@@ -1381,6 +1563,7 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
   dropFloatingLanes(o, &res.lanes);
   probeBoundaries(R, *frame, o, &res.lanes);
   extendPocketsToTheirTaper(R, *frame, o, &res.lanes);
+  addLanesBeyondDashedLines(R, *frame, road, o, &res.lanes);
   indexLanesFromLeft(&res.lanes);
   res.stats.fit_s = since(t0);
   return res;

@@ -1,7 +1,7 @@
 // Lane exploration on one closed atomic road (METHOD.md section 4, Algorithm 1). exploreRoad runs
 // the steps below, each a function of explorer.cc named after it: buildRaster (1); ParticleFilter's
 // seedStartStrip, then per step predict, kill, clusterAndTrack, resample and births (2-3);
-// fitLanes (4); probeBoundaries and indexLanesFromLeft (5).
+// fitLanes (4); probeBoundaries and extendPocketsToTheirTaper (5); addLanesBeyondDashedLines (6), indexLanesFromLeft.
 //
 // 1. The road's BEV evidence is resampled into a straightened raster in the road's Frenet frame
 //    (s along the skeleton, d to the left), each cell classified once: unobserved, drivable,
@@ -49,6 +49,10 @@
 //    ends where its taper closes (extendPocketsToTheirTaper); one whose lines stay a lane apart
 //    back to the junction's ROI (a lane seen late after a turn, or lost in its last metres) runs
 //    to the junction and splits from (merges into) nothing (pocket_to_junction).
+// 6. A dashed line only separates lanes of one direction: where the outermost lane's bound is
+//    dashed and the strip beyond is road the particles did not hold (the far lanes of a wide road,
+//    beyond the segmentation's lane classes), a lane is added there (addLanesBeyondDashedLines,
+//    lanes_beyond_dashed).
 #pragma once
 
 #include "core/bev/bev_grid.h"

@@ -76,6 +76,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("join_gap_max_m", o.join_gap_max_m);
   r.read("join_min_drivable_share", o.join_min_drivable_share);
   r.read("floating_lane_max_m", o.floating_lane_max_m);
+  r.read("lanes_beyond_dashed", o.lanes_beyond_dashed);
   r.read("bin_m", o.bin_m);
   r.read("break_spacing_m", o.break_spacing_m);
   r.read("break_penalty_m2", o.break_penalty_m2);
@@ -110,6 +111,7 @@ void ExplorerOptions::validate() const {
        "carry_lanes_max_m >= 0 and carry_max_turn_rad in [0, 1.6)");
   need(min_drivable_share >= 0 && min_drivable_share <= 1, "min_drivable_share in [0, 1]");
   need(floating_lane_max_m >= 0, "floating_lane_max_m >= 0");
+  need(lanes_beyond_dashed >= 0 && lanes_beyond_dashed <= 8, "lanes_beyond_dashed in [0, 8]");
   need(join_gap_max_m >= 0 && std::isfinite(join_gap_max_m), "join_gap_max_m >= 0");
   need(join_min_drivable_share >= 0 && join_min_drivable_share <= 1, "join_min_drivable_share in [0, 1]");
   need(kill_min_count >= 1, "kill_min_count >= 1");

@@ -120,6 +120,11 @@ struct ExplorerOptions {
                                          //   before and after it (not a bay: out of a lane and back
                                          //   into it on the kerb side) is a glimpse of a far lane,
                                          //   not a lane: dropped (0: never)
+  int lanes_beyond_dashed = 3;           // the outermost lane's bound is a dashed line: a lane of
+                                         //   our direction lies beyond it (the far lanes of a wide
+                                         //   road, past the segmentation's lane classes) where the BEV
+                                         //   shows a strip without a kerb; at most this many added
+                                         //   (explorer.cc addLanesBeyondDashedLines; 0: none)
 
   // --- centre line regression (Eq. 6) and way-points ---
   double bin_m = 1.0;                    // particle positions are binned along s (exact for Eq. 6)

@@ -6,6 +6,36 @@
 
 namespace lanemap::mapping {
 
+namespace {
+
+// The share of a lane's line evidence that lies on its bounds (lane_confidence.h, `agreement`).
+std::optional<double> lineAgreement(const bev::BevGrid& grid, const lanes::ExplorationResult& r, const lanes::Lane& l) {
+  if (!r.frame) return std::nullopt;
+  const double step = grid.resolution();
+  const int half = static_cast<int>(std::round(kAgreementWindowM / step));
+  double near = 0.0, all = 0.0;
+  for (const auto* b : {&l.left, &l.right}) {
+    std::vector<bev::Layer> layers;
+    if (b->type == map::LineType::kDashed || b->type == map::LineType::kSolid) layers = {bev::Layer::kDashedLine, bev::Layer::kSolidLine};
+    else if (b->type == map::LineType::kCurb) layers = {bev::Layer::kCurb};
+    else continue;
+    for (size_t k = 0; k < b->d.size() && k < l.waypoint_s.size(); ++k) {
+      const Eigen::Vector2d p = r.frame->toEnu(l.waypoint_s[k], b->d[k]), n = r.frame->normal(l.waypoint_s[k]);
+      for (int j = -half; j <= half; ++j) {
+        double c = 0.0;
+        const Eigen::Vector2d q = p + j * step * n;
+        for (bev::Layer layer : layers) c += grid.count(q, layer);
+        all += c;
+        if (std::abs(j * step) <= kAgreementCoreM + 1e-9) near += c;
+      }
+    }
+  }
+  if (all <= 0.0) return std::nullopt;
+  return near / all;
+}
+
+}  // namespace
+
 std::vector<LaneConfidence> laneConfidences(const bev::BevGrid& grid, const lanes::ExplorationResult& r,
                                             const lanes::ExplorerOptions& o) {
   std::vector<LaneConfidence> out(r.lanes.size());
@@ -33,6 +63,7 @@ std::vector<LaneConfidence> laneConfidences(const bev::BevGrid& grid, const lane
     c.bounds = probes == 0 ? 0.0 : static_cast<double>(found) / probes;
     c.support = best_density > 0.0 ? density[i] / best_density : 0.0;
     c.repeat = 1.0 - std::pow(0.5, 1.0 + grid.agreement());
+    c.agreement = lineAgreement(grid, r, l);
   }
   return out;
 }

@@ -1,5 +1,6 @@
 // Per-lane confidence (issue 14): a number in [0, 1] from the evidence behind an explored lane, so
-// a map user can tell the lanes to trust from those to check. The mean of four shares:
+// a map user can tell the lanes to trust from those to check. The mean of five shares (four for a
+// lane with no line to measure the agreement by):
 // - observed: the share of the lane's way-points whose BEV cell was seen drivable;
 // - bounds: the share of its boundary points that the probe found (a marking, curb or the end of
 //   the drivable area) rather than put at default_half_width_m from the centre;
@@ -11,20 +12,33 @@
 //   unaligned): 1 - 0.5^(1 + agreement). One drive gives 0.5, two that agree perfectly 0.75,
 //   three 0.875. It is the road's, not the lane's: alignment measures the agreement of a road's
 //   markings as a whole.
+// - agreement: the lane's own. Where its bounds are lines (dashed, solid or a kerb), the share of
+//   those lines' evidence across each bound (agreement_window_m either side, every way-point)
+//   that lies within agreement_core_m of it: observations that agree where the line is (those of
+//   one drive, and of every traversal after alignment) pile up on it; traversals that disagree
+//   about this lane (misaligned here, or one that saw it wrongly) spread its lines. A lane whose
+//   bounds are both virtual has none (std::nullopt) and its value is the mean of the other four.
 #pragma once
 
 #include "core/bev/bev_grid.h"
 #include "core/lanes/explorer.h"
 #include "core/map/lane_map.h"
 
+#include <optional>
 #include <vector>
 
 namespace lanemap::mapping {
 
 struct LaneConfidence {
   double observed = 0.0, bounds = 0.0, support = 0.0, repeat = 0.0;
-  double value() const { return (observed + bounds + support + repeat) / 4.0; }
+  std::optional<double> agreement;
+  double value() const {
+    return agreement ? (observed + bounds + support + repeat + *agreement) / 5.0 : (observed + bounds + support + repeat) / 4.0;
+  }
 };
+
+inline constexpr double kAgreementWindowM = 0.6;  // agreement_window_m: evidence looked for this far either side of a bound
+inline constexpr double kAgreementCoreM = 0.15;   // agreement_core_m: a line (0.15 m of paint) lies within this of it
 
 // One per lane of `result` (same order).
 std::vector<LaneConfidence> laneConfidences(const bev::BevGrid& grid, const lanes::ExplorationResult& result,

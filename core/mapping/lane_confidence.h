@@ -13,8 +13,8 @@
 //   three 0.875. It is the road's, not the lane's: alignment measures the agreement of a road's
 //   markings as a whole.
 // - agreement: the lane's own. Where its bounds are lines (dashed, solid or a kerb), the share of
-//   those lines' evidence across each bound (agreement_window_m either side, every way-point)
-//   that lies within agreement_core_m of it: observations that agree where the line is (those of
+//   those lines' evidence across each bound (kAgreementWindowM either side, every way-point)
+//   that lies within kAgreementCoreM of it: observations that agree where the line is (those of
 //   one drive, and of every traversal after alignment) pile up on it; traversals that disagree
 //   about this lane (misaligned here, or one that saw it wrongly) spread its lines. A lane whose
 //   bounds are both virtual has none (std::nullopt) and its value is the mean of the other four.
@@ -37,8 +37,8 @@ struct LaneConfidence {
   }
 };
 
-inline constexpr double kAgreementWindowM = 0.6;  // agreement_window_m: evidence looked for this far either side of a bound
-inline constexpr double kAgreementCoreM = 0.15;   // agreement_core_m: a line (0.15 m of paint) lies within this of it
+inline constexpr double kAgreementWindowM = 0.6;  // line evidence looked for this far either side of a bound
+inline constexpr double kAgreementCoreM = 0.15;   // a line (0.15 m of paint) lies within this of its bound
 
 // One per lane of `result` (same order).
 std::vector<LaneConfidence> laneConfidences(const bev::BevGrid& grid, const lanes::ExplorationResult& result,

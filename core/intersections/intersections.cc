@@ -23,6 +23,28 @@ using map::TurnDirection;
 using geo::cross;  // core/geo/polyline.h
 using geo::unit;
 
+// Of the indices first..count-1, the one with the least dist(k), that distance and the next least
+// (how clearly it is the nearest); best -1 and both INFINITY when there is none.
+struct NearestTwo {
+  int best = -1;
+  double best_d = INFINITY, second_d = INFINITY;
+};
+template <class Dist>
+NearestTwo nearestTwo(int first, int count, Dist dist) {
+  NearestTwo n;
+  for (int k = first; k < count; ++k) {
+    const double e = dist(k);
+    if (e < n.best_d) {
+      n.second_d = n.best_d;
+      n.best_d = e;
+      n.best = k;
+    } else {
+      n.second_d = std::min(n.second_d, e);
+    }
+  }
+  return n;
+}
+
 // Closest point of a polyline: arc length and signed lateral offset (left positive).
 struct Projection {
   double s = 0.0, d = 0.0, distance = 0.0;
@@ -395,23 +417,13 @@ class Builder {
     }
     int next = 0;  // out lanes left of a pair's are taken
     for (int i = 0; i < static_cast<int>(a.lanes.size()); ++i) {
-      int best = -1;
-      double best_e = INFINITY, second_e = INFINITY;
-      for (int o = next; o < static_cast<int>(d.lanes.size()); ++o) {
-        const double e = std::abs(d.lanes[o].lateral - a.lanes[i].lateral);
-        if (e < best_e) {
-          second_e = best_e;
-          best_e = e;
-          best = o;
-        } else {
-          second_e = std::min(second_e, e);
-        }
-      }
-      if (best < 0 || best_e > o_.offset_match_m) continue;
+      const NearestTwo n = nearestTwo(next, static_cast<int>(d.lanes.size()),
+                                      [&](int o) { return std::abs(d.lanes[o].lateral - a.lanes[i].lateral); });
+      if (n.best < 0 || n.best_d > o_.offset_match_m) continue;
       // A lane between two (one lane becoming two: a lane added, not one unmapped): the rules say.
-      if (second_e - best_e < 1.0) return {};
-      out.emplace_back(i, best);
-      next = best + 1;
+      if (n.second_d - n.best_d < 1.0) return {};
+      out.emplace_back(i, n.best);
+      next = n.best + 1;
     }
     return out;
   }
@@ -544,19 +556,9 @@ class Builder {
     // The lane end the path passes nearest, when it is clearly that one: at most half as far as the
     // next nearest (a car between two lanes, changing lanes there, says neither); else -1.
     const auto nearest = [](const std::vector<LaneEnd>& lanes, const std::vector<Vector2d>& path) {
-      int best = -1;
-      double best_d = INFINITY, second_d = INFINITY;
-      for (int k = 0; k < static_cast<int>(lanes.size()); ++k) {
-        const double dist = project(path, lanes[k].centre.head<2>()).distance;
-        if (dist < best_d) {
-          second_d = best_d;
-          best_d = dist;
-          best = k;
-        } else {
-          second_d = std::min(second_d, dist);
-        }
-      }
-      return best_d <= 0.5 * second_d ? best : -1;
+      const NearestTwo n = nearestTwo(0, static_cast<int>(lanes.size()),
+                                      [&](int k) { return project(path, lanes[k].centre.head<2>()).distance; });
+      return n.best_d <= 0.5 * n.second_d ? n.best : -1;
     };
     for (const auto& p : passages_) {
       if (p.from_road != a.road->id || p.to_road != d.road->id || p.path.size() < 2) continue;

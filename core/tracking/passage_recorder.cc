@@ -14,12 +14,8 @@ void PassageRecorder::addPosition(const Eigen::Vector2d& p) {
   // Keep what a passage can still need: from the intersection reached (if any), else lead_m.
   const double keep_from = reached_ ? along_[static_cast<size_t>(std::max<int64_t>(0, reached_->first - dropped_))]
                                     : along_.back() - o_.lead_m - o_.spacing_m;
-  while (trail_.size() > 2 && along_[1] <= keep_from) {
-    trail_.pop_front();
-    along_.pop_front();
-    ++dropped_;
-  }
-  while (trail_.size() > 2 && along_.back() - along_.front() > o_.max_length_m + o_.lead_m) {  // lingering
+  // (or, lingering, at most max_length_m + lead_m of it)
+  while (trail_.size() > 2 && (along_[1] <= keep_from || along_.back() - along_.front() > o_.max_length_m + o_.lead_m)) {
     trail_.pop_front();
     along_.pop_front();
     ++dropped_;

@@ -10,6 +10,7 @@
 #include <numeric>
 #include <random>
 #include <unordered_map>
+#include <utility>
 
 namespace lanemap::lanes {
 
@@ -19,6 +20,13 @@ using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// The upper median of a non-empty sample: its element at size / 2 in order.
+template <class T>
+T upperMedian(std::vector<T> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
 
 // Direct tile access to a BevGrid (one hash lookup per tile change, not per layer and cell).
 class BevSampler {
@@ -589,8 +597,7 @@ class ParticleFilter {
     if (!surv_.empty()) {
       std::vector<double> ss;
       for (int n : surv_) ss.push_back(S_[n]);
-      std::nth_element(ss.begin(), ss.begin() + ss.size() / 2, ss.end());
-      station_ = std::max(station_, ss[ss.size() / 2]);
+      station_ = std::max(station_, upperMedian(std::move(ss)));
     } else {
       station_ += 0.5 * (o_.v_min + o_.v_max) * o_.dt_s;
     }
@@ -1093,8 +1100,7 @@ void recentreOnBounds(const FrenetFrame& frame, const ExplorerOptions& o, const 
     if (both_hit[k]) e.push_back(0.5 * (lane->left.d[k] + lane->right.d[k]) - lane->centre.d(lane->waypoint_s[k]));
   }
   if (e.empty() || 2 * e.size() < lane->waypoint_s.size()) return;
-  std::nth_element(e.begin(), e.begin() + e.size() / 2, e.end());
-  const double shift = e[e.size() / 2];
+  const double shift = upperMedian(std::move(e));
   if (!(std::abs(shift) <= o.recentre_max_m)) return;
   // The moved line stays well inside its bounds everywhere (a quarter of the lane's width from
   // each, at most half a metre), or the lane keeps its line: where a bound closes in (a taper at
@@ -1360,8 +1366,7 @@ BeyondCandidate candidateBeyond(const Raster& R, const ExplorerOptions& o, const
   const size_t n = near.d.size();
   std::vector<double> widths;
   for (size_t k = 0; k < n; ++k) widths.push_back(a.left.d[k] - a.right.d[k]);
-  std::nth_element(widths.begin(), widths.begin() + n / 2, widths.end());
-  double w = std::clamp(widths[n / 2], o.lane_width_min_m, o.lane_width_max_m);
+  double w = std::clamp(upperMedian(std::move(widths)), o.lane_width_min_m, o.lane_width_max_m);
   // A line at the far side: the offset from the near bound (within half a metre of that lane's
   // width, lanes of one road being about as wide) where most rows show paint within a cell.
   const double half_step = 0.5 * o.waypoint_spacing_m;
@@ -1394,9 +1399,7 @@ BeyondCandidate candidateBeyond(const Raster& R, const ExplorerOptions& o, const
   }
   if (rows == 0) return c;
   const int best = static_cast<int>(std::max_element(line_rows.begin(), line_rows.end()) - line_rows.begin());
-  std::vector<int> sorted = line_rows;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const bool far_line = line_rows[best] >= 0.05 * rows && line_rows[best] >= 2 * sorted[sorted.size() / 2];
+  const bool far_line = line_rows[best] >= 0.05 * rows && line_rows[best] >= 2 * upperMedian(line_rows);
   if (far_line) {
     w = (lo + best) * R.res;
     c.far_type = line_dashed[best] * 2 > line_rows[best] ? map::LineType::kDashed : map::LineType::kSolid;
@@ -1494,12 +1497,11 @@ void addLanesBeyondDashedLines(const Raster& R, const FrenetFrame& frame, const 
     const Boundary& near = best_side > 0 ? a.left : a.right;
     std::vector<double> half;
     for (size_t k = 0; k < near.d.size(); ++k) half.push_back(std::abs(near.d[k] - a.centre.d(a.waypoint_s[k])));
-    std::nth_element(half.begin(), half.begin() + half.size() / 2, half.end());
     Lane lane;
     lane.s_begin = a.s_begin;
     lane.s_end = a.s_end;
     PiecewiseLinearFit fit = a.centre.piecewiseLinear();
-    const double shift = best_side * (half[half.size() / 2] + 0.5 * best.width);
+    const double shift = best_side * (upperMedian(std::move(half)) + 0.5 * best.width);
     for (double& v : fit.values) v += shift;
     lane.centre = CentreLine(fit, lane.s_begin, lane.s_end);
     lane.waypoint_s = a.waypoint_s;

@@ -42,11 +42,11 @@ struct CityCoverage {
 // as it can in `seconds` of driving at `speed_mps`. Greedy with a look-ahead: at each
 // intersection the first road of the path of up to `lookahead` roads that covers the most new
 // length (the quicker path on a tie); where no such path starts, the quickest way to the nearest
-// road left to cover. No U-turns (a driver avoids them; the simulator cannot make them): not back
-// onto the road's reverse, nor a heading change over 150 degrees onto another road; OSM turn
-// restrictions are not known here (nor does the simulator's world honour them; its junctions leave
-// out U-turns by the same 150 degrees). A dead
-// end ends the route. When the time left is shorter than every road that would cover more, the
+// road left to cover. No U-turns (a driver avoids them; the simulator makes one only at a dead end
+// an auto route cannot go on from, never on a given route): not back onto the road's reverse, nor
+// a heading change over 150 degrees onto another road; OSM turn restrictions are not known here
+// (nor does the simulator's world honour them; its junctions leave out U-turns by the same 150
+// degrees). A dead end ends the route. When the time left is shorter than every road that would cover more, the
 // route ends on the road leaving its last intersection with the most left to cover, as far as the
 // time goes (its seconds and new_m count that part).
 struct CoveragePlan {

@@ -136,10 +136,30 @@ std::vector<const Lanelet*> neighbours(const LaneGraph& g, const Lanelet& l) {
   return out;
 }
 
+// The lane a car turning round at the end of `l` drives on in: at a dead end of a two-way road, the
+// reverse road's lane starting nearest l's end (within kUturnMaxWidthM); nullptr elsewhere.
+constexpr double kUturnMaxWidthM = 15.0;
+const Lanelet* uTurnLane(const skeleton::Skeleton& sk, const LaneGraph& g, const Lanelet& l) {
+  const auto* road = sk.road(l.road_id);
+  if (!road || road->reverse_id < 0 || l.kind != LaneletKind::kRoad) return nullptr;
+  const auto* end = sk.intersection(road->to);
+  const auto it = g.by_road.find(road->reverse_id);
+  if (!end || !end->dead_end || it == g.by_road.end()) return nullptr;
+  const Lanelet* best = nullptr;
+  double best_d = kUturnMaxWidthM;
+  for (const Lanelet* r : it->second) {
+    const double d = (r->centre.front() - l.centre.back()).head<2>().norm();
+    if (d < best_d) best_d = d, best = r;
+  }
+  return best;
+}
+
 // Auto drive: a seeded random walk over the lane graph, so that every turn it takes is one its lane
 // allows. At a road lanelet long enough, it changes to a neighbour lane with
 // lane_change_probability; at a road's end it takes one of its lane's successors, avoiding U-turns,
-// dead ends and roads it has driven, where it can.
+// dead ends and roads it has driven, where it can. When no such walk lasts the drive, walks that
+// take a dead end where only dead ends go on (a fresh one first) and turn round at its end onto
+// the reverse road (uTurnLane).
 std::vector<LanePlan::Leg> autoLanes(const skeleton::Skeleton& sk, const LaneGraph& g,
                                      const DriveOptions& o, std::mt19937_64& rng) {
   const double wanted = o.cruise_speed_mps * o.duration_s * 1.2 + 50.0;
@@ -154,7 +174,10 @@ std::vector<LanePlan::Leg> autoLanes(const skeleton::Skeleton& sk, const LaneGra
   if (starts.empty()) throw RouteError("no road lane of 20 m or more to start a drive on");
   std::vector<LanePlan::Leg> best;
   double best_len = -1.0;
-  for (int attempt = 0; attempt < 20 && best_len < wanted; ++attempt) {
+  // Twenty walks that stop where only dead ends go on; if none lasts the drive (a small extract
+  // whose roads end at its edges), twenty more that drive into a dead end and turn round there.
+  for (int attempt = 0; attempt < 40 && best_len < wanted; ++attempt) {
+    const bool turn_round = attempt >= 20;
     std::vector<LanePlan::Leg> legs;
     std::map<int64_t, int> roads_used;
     const Lanelet* cur = starts[rng() % starts.size()];
@@ -178,7 +201,7 @@ std::vector<LanePlan::Leg> autoLanes(const skeleton::Skeleton& sk, const LaneGra
         const Lanelet* via;   // intersection lanelet or nullptr
         const Lanelet* next;  // the road lanelet after it
       };
-      std::vector<Option> options, fresh;
+      std::vector<Option> options, fresh, dead_ends, fresh_dead_ends;
       for (int64_t sid : cur->successors) {
         const Lanelet* n = g.get(sid);
         if (!n) continue;
@@ -196,13 +219,27 @@ std::vector<LanePlan::Leg> autoLanes(const skeleton::Skeleton& sk, const LaneGra
           if (!road) continue;
           if (cur_road && opt.next->road_id == cur_road->reverse_id) continue;  // no U-turns
           const auto* end = sk.intersection(road->to);
-          if (opt.next->road_id != cur->road_id && end && end->dead_end) continue;
+          const bool is_fresh = opt.next->road_id == cur->road_id || !roads_used.count(opt.next->road_id);
+          if (opt.next->road_id != cur->road_id && end && end->dead_end) {
+            dead_ends.push_back(opt);
+            if (is_fresh) fresh_dead_ends.push_back(opt);
+            continue;
+          }
           options.push_back(opt);
-          if (opt.next->road_id == cur->road_id || !roads_used.count(opt.next->road_id)) fresh.push_back(opt);
+          if (is_fresh) fresh.push_back(opt);
         }
       }
-      const auto& pick = fresh.empty() ? options : fresh;
-      if (pick.empty()) break;
+      const auto& pick = !fresh.empty() ? fresh : !options.empty() ? options
+                         : !turn_round ? options : !fresh_dead_ends.empty() ? fresh_dead_ends : dead_ends;
+      if (pick.empty()) {
+        // The lane ends with nothing after it: turn round at a dead end, else the drive ends here.
+        const Lanelet* back = turn_round && cur->successors.empty() ? uTurnLane(sk, g, *cur) : nullptr;
+        if (!back) break;
+        legs.back().u_turn_to_next = true;
+        len += 0.5 * M_PI * (back->centre.front() - cur->centre.back()).head<2>().norm();
+        cur = back;
+        continue;
+      }
       const Option& chosen = pick[rng() % pick.size()];
       if (chosen.via) {
         legs.push_back({chosen.via->id, false});
@@ -413,6 +450,22 @@ Trajectory::Trajectory(const map::LaneMap& truth, const World& world, const Lane
     }
     for (double s = entry_s; s < len_a; s += step) raw.push_back({pointAt(a->centre, s), a->id, a->road_id});
     entry_s = 0.0;
+    if (plan.legs[i].u_turn_to_next && i + 1 < plan.legs.size()) {
+      // Turning round at a dead end: a cubic Bezier from a's end, heading on, to b's start, heading
+      // back (control points 2/3 of the gap out: near a half circle across the road), on no lane.
+      const Lanelet* b = g.get(plan.legs[i + 1].lanelet);
+      if (!b || b->centre.size() < 2) throw RouteError("lanelet " + std::to_string(plan.legs[i + 1].lanelet) + " has no centre line");
+      const Eigen::Vector2d p0 = pointAt(a->centre, len_a), p3 = pointAt(b->centre, 0.0);
+      const Eigen::Vector2d ta = (p0 - pointAt(a->centre, len_a - 1.0)).normalized();
+      const Eigen::Vector2d tb = (pointAt(b->centre, 1.0) - p3).normalized();
+      const double k = 2.0 / 3.0 * (p3 - p0).norm();
+      const Eigen::Vector2d p1 = p0 + k * ta, p2 = p3 - k * tb;
+      const int n = std::max(4, static_cast<int>(std::ceil(0.5 * M_PI * (p3 - p0).norm() / step)));
+      for (int j = 0; j < n; ++j) {
+        const double u = static_cast<double>(j) / n, w = 1.0 - u;
+        raw.push_back({w * w * w * p0 + 3 * w * w * u * p1 + 3 * w * u * u * p2 + u * u * u * p3, -1, -1});
+      }
+    }
   }
   if (raw.size() < 4) throw RouteError("the planned drive is too short");
 

@@ -71,6 +71,9 @@ struct LanePlan {
   struct Leg {
     int64_t lanelet = -1;
     bool lane_change_to_next = false;  // the next leg is a neighbour lane (same road)
+    // The lane ends at a dead end (an extract's edge, a cul-de-sac): the car turns round there
+    // onto the next leg, a lane of the reverse road (auto routes only, where nothing else goes on).
+    bool u_turn_to_next = false;
   };
   std::vector<Leg> legs;
   std::vector<int64_t> roads;          // atomic road ids in order (the route)
@@ -79,7 +82,9 @@ struct LanePlan {
 
 // Plans the route and its lanes. Auto (options.route_nodes empty): a seeded random walk over the
 // lane graph that turns where its lane allows, changes lanes now and then, avoids U-turns, dead
-// ends and roads already driven where it can, long enough for duration_s at cruise speed. With
+// ends and roads already driven where it can, long enough for duration_s at cruise speed; where
+// nothing but dead ends goes on (a small extract's edges) it drives into one and turns round at
+// its end, as a mapping car at the edge of its area would. With
 // route_nodes: through those intersections in order (fewest roads between consecutive ones, then
 // the cheapest lanes); throws RouteError, naming where it fails, when that is impossible.
 LanePlan planDrive(const skeleton::Skeleton& skeleton, const map::LaneMap& truth,

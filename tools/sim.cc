@@ -194,7 +194,7 @@ int main(int argc, char** argv) {
   uint64_t seed = 1;
   std::optional<uint64_t> world_seed;
   double duration = 120.0, camera_hz = 10.0, pose_hz = 100.0;
-  bool no_lidar = false, flat = false, keep_lane_tags = false, force = false, quiet = false;
+  bool no_lidar = false, flat = false, keep_lane_tags = false, force = false, quiet = false, stop_at_dead_ends = false;
   int threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   auto* osm_opt = app.add_option("--osm", osm_path, "road network (.osm or .osm.pbf)");
   auto* l2_opt = app.add_option("--lanelet2", lanelet2_path,
@@ -222,6 +222,9 @@ int main(int argc, char** argv) {
   app.add_option("--camera-hz", camera_hz, "camera frame rate")->check(CLI::Range(0.1, 60.0));
   app.add_option("--pose-hz", pose_hz, "pose rate")->check(CLI::Range(0.1, 1000.0));
   app.add_flag("--no-lidar", no_lidar, "no LIDAR_PACKETS");
+  app.add_flag("--stop-at-dead-ends", stop_at_dead_ends,
+               "auto route: end the drive at the first dead end it cannot avoid rather than turn round there "
+               "(sim_drive.yaml turn_round_at_dead_ends: false; the routes before 2026-12-06)");
   app.add_flag("--flat", flat, "a flat world: no grades, crown or bumps");
   app.add_flag("--keep-lane-tags", keep_lane_tags, "roads.osm keeps lanes/turn:lanes/width tags");
   app.add_option("--vehicle", vehicle_path, "camera and LIDAR config");
@@ -301,6 +304,7 @@ int main(int argc, char** argv) {
     drive.seed = seed;
     drive.duration_s = duration;
     drive.route_nodes = parseRoute(route_text);
+    if (stop_at_dead_ends) drive.turn_round_at_dead_ends = false;
     nlohmann::json cover_json = nullptr;
     if (!cover_path.empty()) {
       const auto cov = mapping::readCoverageJson(cover_path, sk);

@@ -51,6 +51,9 @@ int renderSimFrames(const SimFrameOptions& o, const std::function<bool(const Sim
   if (!o.drive_yaml.empty()) drive = sim::DriveOptions::fromYaml(YAML::LoadFile(o.drive_yaml)["drive"]);
   drive.seed = o.seed;
   drive.duration_s = o.duration_s;
+  // The routes the shipped model was trained and scored on (models/README.md): none turns round at
+  // a dead end, where every lane would be labelled background while the camera looks along the road.
+  drive.turn_round_at_dead_ends = false;
 
   const osm::OsmData osm_data = osm::readOsm(o.osm_path);
   const skeleton::Skeleton sk = skeleton::Skeleton::build(osm_data);

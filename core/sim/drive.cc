@@ -176,7 +176,8 @@ std::vector<LanePlan::Leg> autoLanes(const skeleton::Skeleton& sk, const LaneGra
   double best_len = -1.0;
   // Twenty walks that stop where only dead ends go on; if none lasts the drive (a small extract
   // whose roads end at its edges), twenty more that drive into a dead end and turn round there.
-  for (int attempt = 0; attempt < 40 && best_len < wanted; ++attempt) {
+  const int attempts = o.turn_round_at_dead_ends ? 40 : 20;
+  for (int attempt = 0; attempt < attempts && best_len < wanted; ++attempt) {
     const bool turn_round = attempt >= 20;
     std::vector<LanePlan::Leg> legs;
     std::map<int64_t, int> roads_used;
@@ -370,6 +371,7 @@ DriveOptions DriveOptions::fromYaml(const config::YamlReader& r) {
   r.read("lane_change_length_m", o.lane_change_length_m);
   r.read("lane_change_probability", o.lane_change_probability);
   r.read("label_ahead_max_turn_deg", o.label_ahead_max_turn_deg);
+  r.read("turn_round_at_dead_ends", o.turn_round_at_dead_ends);
   if (o.cruise_speed_mps <= 0 || o.accel <= 0 || o.max_lateral_accel <= 0 || o.lane_change_length_m <= 0 ||
       o.lane_change_probability < 0 || o.lane_change_probability >= 1 || o.label_ahead_max_turn_deg > 180) {
     r.failHere("speeds, accelerations and lengths must be > 0, lane_change_probability in [0, 1), "

@@ -43,6 +43,10 @@ struct DriveOptions {
   // (README, "Labels inside a junction"): no pooled gain yet with the mapper and model of today.
   double label_ahead_max_turn_deg = -1.0;
   std::vector<int64_t> route_nodes;  // intersection ids to pass through, in order; empty: auto
+  // Auto routes: when no walk avoiding dead ends lasts the drive, walks that turn round at a dead
+  // end (planDrive). false: the longest walk that stops at the first dead end (routes before
+  // 2026-12-06; the segmentation model's frames, seg::renderSimFrames, keep those).
+  bool turn_round_at_dead_ends = true;
 
   // Reads the keys present in a `drive` node (config/sim_drive.yaml); others keep their defaults.
   // An unknown key or a bad value throws config::ConfigError naming it.

@@ -303,6 +303,13 @@ TEST(Drive, AtADeadEndTheCarTurnsRoundAndDrivesOn) {
   }
   EXPECT_GT(turning, 10);
   EXPECT_LT(slowest, 4.0);
+
+  // Without turning round (the routes before, kept for the segmentation model's frames): the drive
+  // stops at the first dead end, well short of its duration.
+  o.turn_round_at_dead_ends = false;
+  const auto stopped = sim::planDrive(*net->sk, truth, o);
+  for (const auto& leg : stopped.legs) EXPECT_FALSE(leg.u_turn_to_next);
+  EXPECT_LT(sim::Trajectory(truth, *net->world, stopped, o).duration(), 0.5 * o.duration_s);
 }
 
 TEST(Drive, SomeSeedsChangeLanes) {

@@ -405,7 +405,7 @@ TEST(Lanelet2Checks, MapBuiltFromATestDriveHasNoIssue) {
 // lanemap-check's shared_borders failed on 6. The drives stop at the first dead end
 // (--stop-at-dead-ends: the routes this was measured on). NOT YET on the routes that turn round
 // there (the default since 2026-12-06): aurora's map fails shared_borders (a link and its reverse,
-// both bounded on the OSM line: two line strings on top of each other) and seattle's has two
+// bounded within 0.1 m of each other on the OSM line: two line strings on top of each other) and seattle's has two
 // curvature warnings on a connection shaped by the car's path (27 -> 6); README, "Lanelet2 and
 // Autoware".
 class EveryExtract : public ::testing::TestWithParam<const char*> {};

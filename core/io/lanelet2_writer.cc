@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <regex>
 #include <set>
 #include <unordered_map>
@@ -38,6 +39,10 @@ namespace {
 // meridian: two nodes 5.00-5.02 cm apart here are under 5 cm there (a fused West Oakland map had
 // 134 such warnings). 5.01 cm keeps every pair written at 5.008 cm or more in UTM.
 constexpr double kNodeMergeDistanceM = 0.0501;
+// Points closer than this are the same point (a border two lines share drawn twice).
+constexpr double kNodeSameM = 0.001;
+// Lanelet2's validator warns where a bound turns tighter (mapping.curvature_too_big).
+constexpr double kMaxCurvature = 0.5;
 constexpr double kStraightTurnRad = 0.5236;    // turn_direction: heading change under 30 deg
 
 // v with `decimals` digits after the point, as printf's "%.Nf" writes it (std::to_chars with a
@@ -81,26 +86,24 @@ const char* turnTag(TurnDirection t) {
   return nullptr;
 }
 
-// Nodes of the file: one per distinct point (points closer than 1 mm share a node), ids given in
-// order of first use from `next_id` on.
+// Nodes of the file: one per distinct point (points closer than the merge distance share a node),
+// ids given in order of first use from `next_id` on.
 class NodeTable {
  public:
-  explicit NodeTable(int64_t first_id) : next_id_(first_id), slots_(1024) {}
+  explicit NodeTable(int64_t first_id) : first_id_(first_id), next_id_(first_id), slots_(1024) {}
 
   // The first node, in the order of the 3x3 cells around p and then of insertion, closer than the
   // merge distance; else a new one.
   int64_t idFor(const Eigen::Vector3d& p) {
-    const int64_t cx = cellOf(p.x()), cy = cellOf(p.y());
-    for (int64_t dx = -1; dx <= 1; ++dx) {
-      for (int64_t dy = -1; dy <= 1; ++dy) {
-        const Slot* cell = find(cx + dx, cy + dy);
-        if (!cell) continue;
-        for (int64_t index = cell->head; index >= 0; index = next_[index]) {
-          if ((points_[index] - p).norm() < kNodeMergeDistanceM) return ids_[index];
-        }
-      }
-    }
-    return add(p);
+    const int64_t index = nearIndex(p);
+    return index >= 0 ? ids_[index] : add(p);
+  }
+
+  // The node idFor would merge p into, and how far it lies from p; nullopt when p gets a new one.
+  std::optional<std::pair<int64_t, double>> merged(const Eigen::Vector3d& p) const {
+    const int64_t index = nearIndex(p);
+    if (index < 0) return std::nullopt;
+    return std::make_pair(ids_[index], (points_[index] - p).norm());
   }
 
   // A node of its own for p, merged with none (a line shorter than the merge distance keeps 2).
@@ -120,8 +123,23 @@ class NodeTable {
   }
 
   size_t size() const { return points_.size(); }
+
+  int64_t nearIndex(const Eigen::Vector3d& p) const {
+    const int64_t cx = cellOf(p.x()), cy = cellOf(p.y());
+    for (int64_t dx = -1; dx <= 1; ++dx) {
+      for (int64_t dy = -1; dy <= 1; ++dy) {
+        const Slot* cell = find(cx + dx, cy + dy);
+        if (!cell) continue;
+        for (int64_t index = cell->head; index >= 0; index = next_[index]) {
+          if ((points_[index] - p).norm() < kNodeMergeDistanceM) return index;
+        }
+      }
+    }
+    return -1;
+  }
   int64_t id(size_t i) const { return ids_[i]; }
   const Eigen::Vector3d& point(size_t i) const { return points_[i]; }
+  const Eigen::Vector3d& pointOf(int64_t id) const { return points_[static_cast<size_t>(id - first_id_)]; }
 
  private:
   // A cell of the grid (cell size = merge distance) and its points as a list through next_, in
@@ -171,6 +189,7 @@ class NodeTable {
       slots_[i] = s;
     }
   }
+  int64_t first_id_;
   int64_t next_id_;
   std::vector<Slot> slots_;  // size a power of 2
   size_t used_ = 0;
@@ -297,11 +316,39 @@ void appendFixedTag(std::string& out, const char* k, double v, int decimals) {
 
 // A way's node ids, without consecutive repeats (points < 5 cm apart collapse into one node). A
 // line of 2 or more points keeps 2 nodes at least: its last point gets a node of its own.
+// Menger curvature of the plane triangle a, b, c (1 / the radius of the circle through them).
+double curvatureXy(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const Eigen::Vector2d u = (b - a).head<2>(), v = (c - b).head<2>(), w = (c - a).head<2>();
+  const double denom = u.norm() * v.norm() * w.norm();
+  return denom > 1e-12 ? 2.0 * std::abs(u.x() * v.y() - u.y() * v.x()) / denom : 0.0;
+}
+
 std::vector<int64_t> wayNodes(NodeTable& nodes, const std::vector<Eigen::Vector3d>& pts) {
   std::vector<int64_t> refs;
-  for (const auto& p : pts) {
+  std::vector<Eigen::Vector3d> at;  // where each node of refs lies
+  for (size_t k = 0; k < pts.size(); ++k) {
+    const Eigen::Vector3d& p = pts[k];
+    // An inner point merged into another line's node moves by up to the merge distance. Between
+    // points 0.5 m apart that can bend the line past Lanelet2's curvature limit (two connections'
+    // borders shaped by the car's paths, running within 5 cm of each other for a stretch): such a
+    // point is left out instead (the line runs straight past it). A line's ends always merge.
+    if (k > 0 && k + 1 < pts.size() && !refs.empty()) {
+      if (const auto m = nodes.merged(p); m && m->second > kNodeSameM && m->first != refs.back()) {
+        const Eigen::Vector3d& q = nodes.pointOf(m->first);
+        const auto mn = nodes.merged(pts[k + 1]);
+        const Eigen::Vector3d next = mn ? nodes.pointOf(mn->first) : pts[k + 1];
+        const auto bends = [&](const Eigen::Vector3d& x) {
+          return std::max(curvatureXy(at.back(), x, next),
+                          at.size() >= 2 ? curvatureXy(at[at.size() - 2], at.back(), x) : 0.0);
+        };
+        if (bends(q) > kMaxCurvature && bends(q) > bends(p)) continue;
+      }
+    }
     const int64_t id = nodes.idFor(p);
-    if (refs.empty() || refs.back() != id) refs.push_back(id);
+    if (refs.empty() || refs.back() != id) {
+      refs.push_back(id);
+      at.push_back(nodes.pointOf(id));
+    }
   }
   if (refs.size() == 1 && pts.size() >= 2) refs.push_back(nodes.add(pts.back()));
   return refs;

@@ -314,8 +314,6 @@ void appendFixedTag(std::string& out, const char* k, double v, int decimals) {
   out += "\"/>\n";
 }
 
-// A way's node ids, without consecutive repeats (points < 5 cm apart collapse into one node). A
-// line of 2 or more points keeps 2 nodes at least: its last point gets a node of its own.
 // Menger curvature of the plane triangle a, b, c (1 / the radius of the circle through them).
 double curvatureXy(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   const Eigen::Vector2d u = (b - a).head<2>(), v = (c - b).head<2>(), w = (c - a).head<2>();
@@ -323,6 +321,8 @@ double curvatureXy(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eig
   return denom > 1e-12 ? 2.0 * std::abs(u.x() * v.y() - u.y() * v.x()) / denom : 0.0;
 }
 
+// A way's node ids, without consecutive repeats (points < 5 cm apart collapse into one node). A
+// line of 2 or more points keeps 2 nodes at least: its last point gets a node of its own.
 std::vector<int64_t> wayNodes(NodeTable& nodes, const std::vector<Eigen::Vector3d>& pts) {
   std::vector<int64_t> refs;
   std::vector<Eigen::Vector3d> at;  // where each node of refs lies

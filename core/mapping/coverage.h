@@ -46,9 +46,9 @@ struct CityCoverage {
 // an auto route cannot go on from, never on a given route): not back onto the road's reverse, nor
 // a heading change over 150 degrees onto another road; OSM turn restrictions are not known here
 // (nor does the simulator's world honour them; its junctions leave out U-turns by the same 150
-// degrees). A dead end ends the route. When the time left is shorter than every road that would cover more, the
-// route ends on the road leaving its last intersection with the most left to cover, as far as the
-// time goes (its seconds and new_m count that part).
+// degrees). A dead end ends the route. When the time left is shorter than every road that would
+// cover more, the route ends on the road leaving its last intersection with the most left to
+// cover, as far as the time goes (its seconds and new_m count that part).
 struct CoveragePlan {
   std::vector<int64_t> roads;          // directed atomic roads in driving order
   std::vector<int64_t> intersections;  // the first road's start, then each road's end (lanemap-sim --route)

@@ -406,8 +406,8 @@ TEST(Lanelet2Checks, MapBuiltFromATestDriveHasNoIssue) {
 // (--stop-at-dead-ends: the routes this was measured on). NOT YET on the routes that turn round
 // there (the default since 2026-12-06): aurora's map fails shared_borders (a link and its reverse,
 // bounded within 0.1 m of each other on the OSM line: two line strings on top of each other);
-// seattle's two curvature warnings there are fixed (ConnectorBordersWithin5cm... below). README, "Lanelet2
-// and Autoware".
+// seattle's two curvature warnings there are fixed (ConnectorBordersWithin5cm... below).
+// README, "Lanelet2 and Autoware".
 class EveryExtract : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(EveryExtract, MapHasNoIssueAndPassesLanemapCheck) {

@@ -325,7 +325,6 @@ double curvatureXy(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eig
 // line of 2 or more points keeps 2 nodes at least: its last point gets a node of its own.
 std::vector<int64_t> wayNodes(NodeTable& nodes, const std::vector<Eigen::Vector3d>& pts) {
   std::vector<int64_t> refs;
-  std::vector<Eigen::Vector3d> at;  // where each node of refs lies
   for (size_t k = 0; k < pts.size(); ++k) {
     const Eigen::Vector3d& p = pts[k];
     // An inner point merged into another line's node moves by up to the merge distance. Between
@@ -337,18 +336,17 @@ std::vector<int64_t> wayNodes(NodeTable& nodes, const std::vector<Eigen::Vector3
         const Eigen::Vector3d& q = nodes.pointOf(m->first);
         const auto mn = nodes.merged(pts[k + 1]);
         const Eigen::Vector3d next = mn ? nodes.pointOf(mn->first) : pts[k + 1];
+        const Eigen::Vector3d& last = nodes.pointOf(refs.back());
         const auto bends = [&](const Eigen::Vector3d& x) {
-          return std::max(curvatureXy(at.back(), x, next),
-                          at.size() >= 2 ? curvatureXy(at[at.size() - 2], at.back(), x) : 0.0);
+          return std::max(curvatureXy(last, x, next),
+                          refs.size() >= 2 ? curvatureXy(nodes.pointOf(refs[refs.size() - 2]), last, x) : 0.0);
         };
-        if (bends(q) > kMaxCurvature && bends(q) > bends(p)) continue;
+        const double merged_bend = bends(q);
+        if (merged_bend > kMaxCurvature && merged_bend > bends(p)) continue;
       }
     }
     const int64_t id = nodes.idFor(p);
-    if (refs.empty() || refs.back() != id) {
-      refs.push_back(id);
-      at.push_back(nodes.pointOf(id));
-    }
+    if (refs.empty() || refs.back() != id) refs.push_back(id);
   }
   if (refs.size() == 1 && pts.size() >= 2) refs.push_back(nodes.add(pts.back()));
   return refs;

@@ -954,7 +954,8 @@ std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const Ro
   // particles found room (noise the lines left), not a lane (a bus bay or a turn pocket holds its
   // share), unless it splits off and runs on to the junction, at least min_lane_length long and,
   // on a two-way road, on our side of its line at its end: a turn pocket, however thinly seen (one
-  // seen obliquely holds 0.14 of its parent's on the benchmark's montlake, i5 and roosevelt). A lane of its own, over half of whose stretch another lane holds more than
+  // seen obliquely holds 0.14 of its parent's on the benchmark's montlake, i5 and roosevelt). A
+  // lane of its own, over half of whose stretch another lane holds more than
   // 1 / weak_density_fraction times its particles per metre, is a few particles that found room
   // beyond a kerb or between stray labels. Both are dropped, the others renumbered.
   auto density = [](const Lane& l) { return l.particle_samples / std::max(1.0, l.s_end - l.s_begin); };

@@ -2,6 +2,7 @@
 
 #include "core/config/yaml_reader.h"
 #include "core/geo/polyline.h"
+#include "core/intersections/curve.h"
 
 #include <algorithm>
 #include <cmath>
@@ -461,12 +462,10 @@ Trajectory::Trajectory(const map::LaneMap& truth, const World& world, const Lane
       const Eigen::Vector2d ta = (p0 - pointAt(a->centre, len_a - 1.0)).normalized();
       const Eigen::Vector2d tb = (pointAt(b->centre, 1.0) - p3).normalized();
       const double k = 2.0 / 3.0 * (p3 - p0).norm();
-      const Eigen::Vector2d p1 = p0 + k * ta, p2 = p3 - k * tb;
+      intersections::BezierConnection turn;
+      turn.control = {p0, p0 + k * ta, p3 - k * tb, p3};
       const int n = std::max(4, static_cast<int>(std::ceil(0.5 * M_PI * (p3 - p0).norm() / step)));
-      for (int j = 0; j < n; ++j) {
-        const double u = static_cast<double>(j) / n, w = 1.0 - u;
-        raw.push_back({w * w * w * p0 + 3 * w * w * u * p1 + 3 * w * u * u * p2 + u * u * u * p3, -1, -1});
-      }
+      for (int j = 0; j < n; ++j) raw.push_back({turn.point(static_cast<double>(j) / n), -1, -1});
     }
   }
   if (raw.size() < 4) throw RouteError("the planned drive is too short");

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <string>
 #include <utility>
 
 namespace {
@@ -25,16 +26,19 @@ struct Net {
   std::unique_ptr<sim::SimWorld> world;
 };
 
+// The network of data/`osm_rel`, its skeleton and its world (seed 1).
+Net* loadNet(const std::string& osm_rel) {
+  auto* n = new Net;
+  n->osm = osm::readOsm(lanemap::testing::dataPath(osm_rel));
+  n->sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(n->osm));
+  sim::WorldOptions o;
+  o.seed = 1;
+  n->world = sim::buildWorld(*n->sk, o);
+  return n;
+}
+
 const Net& westOakland() {
-  static Net* net = [] {
-    auto* n = new Net;
-    n->osm = osm::readOsm(lanemap::testing::dataPath("osm/west-oakland.osm"));
-    n->sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(n->osm));
-    sim::WorldOptions o;
-    o.seed = 1;
-    n->world = sim::buildWorld(*n->sk, o);
-    return n;
-  }();
+  static Net* net = loadNet("osm/west-oakland.osm");
   return *net;
 }
 
@@ -254,15 +258,7 @@ TEST(Drive, ImpossibleRoutesAreRejected) {
 // turns round at its end onto the reverse road and comes back through the junction, so the drive
 // lasts its duration and passes the junction several times.
 TEST(Drive, AtADeadEndTheCarTurnsRoundAndDrivesOn) {
-  static const Net* net = [] {
-    auto* n = new Net;
-    n->osm = osm::readOsm(lanemap::testing::dataPath("osm/dev/montlake_roundabout.osm"));
-    n->sk = std::make_unique<skeleton::Skeleton>(skeleton::Skeleton::build(n->osm));
-    sim::WorldOptions o;
-    o.seed = 1;
-    n->world = sim::buildWorld(*n->sk, o);
-    return n;
-  }();
+  static const Net* net = loadNet("osm/dev/montlake_roundabout.osm");
   const auto& truth = net->world->truth();
   sim::DriveOptions o;
   o.seed = 1;

@@ -1,5 +1,7 @@
 #include "core/mapping/map_assembler.h"
 
+#include "core/mapping/shared_dividers.h"
+
 #include <algorithm>
 #include <set>
 #include <tuple>
@@ -110,6 +112,7 @@ map::LaneMap MapAssembler::map(std::vector<std::string>* failures) {
     all.lanelets.insert(all.lanelets.end(), m.lanelets.begin(), m.lanelets.end());
   }
   intersections::appendIntersections(all, intersections());
+  shareDividers(all, skeleton_);  // two bounds of opposite lanes on top of each other: one line
   if (failures) {
     for (auto& f : this->failures()) failures->push_back(std::move(f));
   }

@@ -402,17 +402,16 @@ TEST(Lanelet2Checks, MapBuiltFromATestDriveHasNoIssue) {
 // error, and pass every requirement of lanemap-check. A 40 s drive each (seed 1, camera only at
 // 5 Hz), mapped on the simulator's truth labels. Before the shared borders, the boundary outlier
 // rule and the chord for too tight bounds: 12 validator issues on 3 of the 14 maps and
-// lanemap-check's shared_borders failed on 6. The drives stop at the first dead end
-// (--stop-at-dead-ends: the routes this was measured on). NOT YET on the routes that turn round
-// there (the default since 2026-12-06): aurora's map fails shared_borders (a link and its reverse,
-// bounded within 0.1 m of each other on the OSM line: two line strings on top of each other);
-// seattle's two curvature warnings there are fixed (ConnectorBordersWithin5cm... below).
-// README, "Lanelet2 and Autoware".
+// lanemap-check's shared_borders failed on 6. The drives turn round at dead ends (the default
+// since 2026-12-06): on them aurora's map failed shared_borders until the bounds of opposite lanes
+// on top of each other were made one line (a link and its reverse, bounded within 0.1 m of each
+// other on the OSM line; core/mapping/shared_dividers.h), and seattle's had two curvature warnings
+// (ConnectorBordersWithin5cm... below). README, "Lanelet2 and Autoware".
 class EveryExtract : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(EveryExtract, MapHasNoIssueAndPassesLanemapCheck) {
   REQUIRE_TOOLS();
-  const std::string d = lt::sharedSimDrive(GetParam(), 40.0, 1, "--no-lidar --camera-hz 5 --stop-at-dead-ends");
+  const std::string d = lt::sharedSimDrive(GetParam(), 40.0, 1, "--no-lidar --camera-hz 5");
   ASSERT_FALSE(d.empty());
   lt::TempDir out("l2-extract");
   const auto r = lt::runCommand(lt::binPath("lanemap-offline") + " -q --oracle --no-lidar --log " + d +

@@ -7,6 +7,7 @@
 // intersection kept from before a road changed, shows up as a difference.
 #include "core/intersections/intersections.h"
 #include "core/mapping/map_assembler.h"
+#include "core/mapping/shared_dividers.h"
 #include "core/osm/osm_data.h"
 #include "core/sim/world_builder.h"
 #include "core/skeleton/skeleton.h"
@@ -29,9 +30,10 @@ using World = lanemap::testing::TruthWorld;
 const World& world() { return lanemap::testing::westOaklandTruthWorld(); }
 
 // The map as the assembler built it before it was incremental: every road's lanelets, then every
-// intersection rebuilt from all roads and appended one at a time.
+// intersection rebuilt from all roads and appended one at a time (then, as since, the bounds of
+// opposite lanes on top of each other made one line).
 map::LaneMap fullRebuild(const World& w, const std::map<int64_t, map::LaneMap>& roads,
-                         std::vector<std::string>* failures) {
+                         std::vector<std::string>* failures, bool share_dividers = true) {
   map::LaneMap all;
   const auto& o = w.sk->frame().origin();
   all.origin_lat = o.lat;
@@ -47,6 +49,7 @@ map::LaneMap fullRebuild(const World& w, const std::map<int64_t, map::LaneMap>& 
   for (const auto& r : intersections::buildIntersections(*w.sk, roads, {}, w.data.restrictions, failures)) {
     intersections::appendIntersection(all, r);
   }
+  if (share_dividers) mapping::shareDividers(all, *w.sk);  // as map() does: one line for two bounds on top of each other
   return all;
 }
 
@@ -180,7 +183,7 @@ TEST(MapAssembler, MovingOneRoadRebuildsTheIntersectionsAtItsEnds) {
 TEST(MapAssembler, AppendIntersectionsInOnePassEqualsAppendingOneByOne) {
   const World& w = world();
   std::vector<std::string> failures;
-  const map::LaneMap ref = fullRebuild(w, w.roads, &failures);
+  const map::LaneMap ref = fullRebuild(w, w.roads, &failures, false);
   const auto results = intersections::buildIntersections(*w.sk, w.roads, {}, w.data.restrictions);
   std::vector<const intersections::IntersectionResult*> ptrs;
   for (const auto& r : results) ptrs.push_back(&r);

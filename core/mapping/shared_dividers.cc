@@ -1,0 +1,143 @@
+#include "core/mapping/shared_dividers.h"
+
+#include "core/geo/polyline.h"
+#include "core/io/lanelet2_orientation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <unordered_map>
+#include <vector>
+
+namespace lanemap::mapping {
+namespace {
+
+using Points = std::vector<Eigen::Vector3d>;
+
+// Points every metre at most along a line, its vertices included.
+std::vector<Eigen::Vector2d> everyMetre(const Points& pl) {
+  std::vector<Eigen::Vector2d> out;
+  for (size_t i = 0; i + 1 < pl.size(); ++i) {
+    const Eigen::Vector2d a = pl[i].head<2>(), b = pl[i + 1].head<2>();
+    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm())));
+    for (int k = 0; k < n; ++k) out.push_back(a + (b - a) * (static_cast<double>(k) / n));
+  }
+  if (!pl.empty()) out.push_back(pl.back().head<2>());
+  return out;
+}
+
+// The share of `a`'s points (every metre) within tolerance_m of `b`.
+double shareOn(const Points& a, const Points& b, double tolerance_m) {
+  const auto s = everyMetre(a);
+  if (s.empty()) return 0.0;
+  size_t on = 0;
+  for (const auto& p : s) on += geo::distanceToPolylineXy(b, p) <= tolerance_m;
+  return static_cast<double>(on) / static_cast<double>(s.size());
+}
+
+// Whether a and b are one divider drawn twice, once for each direction (see the header).
+bool onTopAgainst(const Points& a, const Points& b, const SharedDividerOptions& o) {
+  if (a.size() < 2 || b.size() < 2) return false;
+  const Eigen::Vector2d da = (a.back() - a.front()).head<2>(), db = (b.back() - b.front()).head<2>();
+  if (da.dot(db) >= 0.0) return false;
+  if ((a.front() - b.back()).head<2>().norm() > o.end_gap_max_m || (a.back() - b.front()).head<2>().norm() > o.end_gap_max_m) {
+    return false;
+  }
+  return shareOn(a, b, o.tolerance_m) >= o.share && shareOn(b, a, o.tolerance_m) >= o.share;
+}
+
+// Moves a line's end by `by`, and its points near that end by less the farther they are along it
+// (nothing from taper_m on, or at its other end), so the line does not kink where it was joined.
+void moveEnd(Points& pl, bool at_front, const Eigen::Vector3d& by, double taper_m) {
+  if (!at_front) std::reverse(pl.begin(), pl.end());
+  const double reach = std::min(taper_m, geo::polylineLength(pl));
+  std::vector<double> s(pl.size(), 0.0);  // along the line as it was
+  for (size_t i = 1; i < pl.size(); ++i) s[i] = s[i - 1] + (pl[i] - pl[i - 1]).norm();
+  for (size_t i = 0; i < pl.size() && (i == 0 || s[i] < reach); ++i) pl[i] += by * (i == 0 ? 1.0 : 1.0 - s[i] / reach);
+  if (!at_front) std::reverse(pl.begin(), pl.end());
+}
+
+}  // namespace
+
+size_t shareDividers(map::LaneMap& m, const skeleton::Skeleton& skeleton, const SharedDividerOptions& o) {
+  std::unordered_map<int64_t, size_t> line_at;
+  for (size_t i = 0; i < m.lines.size(); ++i) line_at[m.lines[i].id] = i;
+  std::map<int64_t, std::set<int64_t>> bounds_of_road;          // road id -> its road lanelets' bound lines
+  std::map<int64_t, std::set<int64_t>> bounds_of_intersection;  // OSM node id -> its lanelets' bound lines
+  for (const auto& ll : m.lanelets) {
+    auto* bounds = ll.kind == map::LaneletKind::kRoad ? (ll.road_id >= 0 ? &bounds_of_road[ll.road_id] : nullptr)
+                                                      : &bounds_of_intersection[ll.intersection_id];
+    if (!bounds) continue;
+    for (int64_t id : {ll.left_id, ll.right_id}) {
+      if (line_at.count(id)) bounds->insert(id);
+    }
+  }
+  std::set<int64_t> dropped;
+  // Makes a and b one line when they are one divider drawn twice.
+  const auto share = [&](int64_t a, int64_t b) {
+    if (a == b || dropped.count(a) || dropped.count(b)) return;
+    const map::LineString& la = m.lines[line_at.at(a)];
+    const map::LineString& lb = m.lines[line_at.at(b)];
+    if (!onTopAgainst(la.points, lb.points, o)) return;
+    const bool keep_b = la.type == map::LineType::kVirtual && lb.type != map::LineType::kVirtual;
+    const map::LineString& keep = keep_b ? lb : la;
+    const map::LineString& drop = keep_b ? la : lb;
+    // The dropped line's lanelets with the kept one as their bound, as Lanelet2 will read them.
+    std::vector<size_t> users;
+    for (size_t i = 0; i < m.lanelets.size(); ++i) {
+      map::Lanelet ll = m.lanelets[i];
+      if (ll.left_id != drop.id && ll.right_id != drop.id) continue;
+      users.push_back(i);
+      if (ll.left_id == drop.id) ll.left_id = keep.id;
+      if (ll.right_id == drop.id) ll.right_id = keep.id;
+      const auto left = line_at.find(ll.left_id), right = line_at.find(ll.right_id);
+      if (left == line_at.end() || right == line_at.end() ||
+          !io::orientationProblem(ll, m.lines[left->second], m.lines[right->second]).empty()) {
+        return;
+      }
+    }
+    // Lines that ended at the dropped line's ends end at the kept line's (it runs the other way).
+    const Eigen::Vector3d drop_front = drop.points.front(), drop_back = drop.points.back();
+    const Eigen::Vector3d keep_front = keep.points.front(), keep_back = keep.points.back();
+    for (auto& l : m.lines) {
+      if (l.id == drop.id || l.id == keep.id || l.points.empty()) continue;
+      for (bool at_front : {true, false}) {
+        const Eigen::Vector3d end = at_front ? l.points.front() : l.points.back();
+        if ((end - drop_front).norm() < 1e-6) {
+          moveEnd(l.points, at_front, keep_back - end, o.taper_m);
+        } else if ((end - drop_back).norm() < 1e-6) {
+          moveEnd(l.points, at_front, keep_front - end, o.taper_m);
+        }
+      }
+    }
+    const int64_t drop_id = drop.id, keep_id = keep.id;
+    for (size_t i : users) {
+      auto& ll = m.lanelets[i];
+      if (ll.left_id == drop_id) ll.left_id = keep_id;
+      if (ll.right_id == drop_id) ll.right_id = keep_id;
+    }
+    dropped.insert(drop_id);
+  };
+  for (const auto& [road_id, lines] : bounds_of_road) {
+    const auto* road = skeleton.road(road_id);
+    if (!road || road->reverse_id <= road_id) continue;  // each pair once, from its lower id
+    const auto rev = bounds_of_road.find(road->reverse_id);
+    if (rev == bounds_of_road.end()) continue;
+    for (int64_t a : lines) {
+      for (int64_t b : rev->second) share(a, b);
+    }
+  }
+  for (const auto& [node, lines] : bounds_of_intersection) {
+    for (auto a = lines.begin(); a != lines.end(); ++a) {
+      for (auto b = std::next(a); b != lines.end(); ++b) share(*a, *b);
+    }
+  }
+  if (!dropped.empty()) {
+    m.lines.erase(std::remove_if(m.lines.begin(), m.lines.end(), [&](const map::LineString& l) { return dropped.count(l.id) > 0; }),
+                  m.lines.end());
+  }
+  return dropped.size();
+}
+
+}  // namespace lanemap::mapping

@@ -489,6 +489,13 @@ class Builder {
     // their border too: the bound of an earlier connection of this intersection with the same ends.
     const int64_t shared_left = connectorLineBetween(left.points);
     const int64_t shared_right = connectorLineBetween(right.points);
+    // (Read with the shared bound, a short connection whose own bounds Lanelet2 reads as meant
+    // only just can be misread: not built either.)
+    if ((shared_left >= 0 || shared_right >= 0) &&
+        !io::orientationProblem(ll, shared_left >= 0 ? lineOf(shared_left) : left, shared_right >= 0 ? lineOf(shared_right) : right).empty()) {
+      result_.not_built.push_back({a.road->id, i, d.road->id, o});
+      return false;
+    }
     left.id = shared_left >= 0 ? shared_left : next_id_++;
     right.id = shared_right >= 0 ? shared_right : next_id_++;
     ll.id = next_id_++;
@@ -516,6 +523,11 @@ class Builder {
     if (shared_right < 0) result_.map.lines.push_back(std::move(right));
     result_.map.lanelets.push_back(std::move(ll));
     return true;
+  }
+
+  // A line built so far in this intersection, by id (one connectorLineBetween found).
+  const map::LineString& lineOf(int64_t id) const {
+    return *std::find_if(result_.map.lines.begin(), result_.map.lines.end(), [&](const map::LineString& l) { return l.id == id; });
   }
 
   // The bound of a connection built so far in this intersection that runs the way `pts` does: the

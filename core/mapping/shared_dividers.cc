@@ -73,6 +73,20 @@ size_t shareDividers(map::LaneMap& m, const skeleton::Skeleton& skeleton, const 
       if (line_at.count(id)) bounds->insert(id);
     }
   }
+  std::unordered_map<int64_t, std::vector<size_t>> lanelets_of_line;  // line id -> lanelets bounded by it
+  for (size_t i = 0; i < m.lanelets.size(); ++i) {
+    lanelets_of_line[m.lanelets[i].left_id].push_back(i);
+    if (m.lanelets[i].right_id != m.lanelets[i].left_id) lanelets_of_line[m.lanelets[i].right_id].push_back(i);
+  }
+  // Whether Lanelet2 reads lanelet i as meant, with `drop` read as `keep`.
+  const auto readAsMeant = [&](size_t i, int64_t drop, int64_t keep) {
+    map::Lanelet ll = m.lanelets[i];
+    if (ll.left_id == drop) ll.left_id = keep;
+    if (ll.right_id == drop) ll.right_id = keep;
+    const auto left = line_at.find(ll.left_id), right = line_at.find(ll.right_id);
+    return left != line_at.end() && right != line_at.end() &&
+           io::orientationProblem(ll, m.lines[left->second], m.lines[right->second]).empty();
+  };
   std::set<int64_t> dropped;
   // Makes a and b one line when they are one divider drawn twice.
   const auto share = [&](int64_t a, int64_t b) {
@@ -81,42 +95,41 @@ size_t shareDividers(map::LaneMap& m, const skeleton::Skeleton& skeleton, const 
     const map::LineString& lb = m.lines[line_at.at(b)];
     if (!onTopAgainst(la.points, lb.points, o)) return;
     const bool keep_b = la.type == map::LineType::kVirtual && lb.type != map::LineType::kVirtual;
-    const map::LineString& keep = keep_b ? lb : la;
-    const map::LineString& drop = keep_b ? la : lb;
-    // The dropped line's lanelets with the kept one as their bound, as Lanelet2 will read them.
-    std::vector<size_t> users;
-    for (size_t i = 0; i < m.lanelets.size(); ++i) {
-      map::Lanelet ll = m.lanelets[i];
-      if (ll.left_id != drop.id && ll.right_id != drop.id) continue;
-      users.push_back(i);
-      if (ll.left_id == drop.id) ll.left_id = keep.id;
-      if (ll.right_id == drop.id) ll.right_id = keep.id;
-      const auto left = line_at.find(ll.left_id), right = line_at.find(ll.right_id);
-      if (left == line_at.end() || right == line_at.end() ||
-          !io::orientationProblem(ll, m.lines[left->second], m.lines[right->second]).empty()) {
-        return;
-      }
-    }
+    const int64_t keep_id = keep_b ? b : a, drop_id = keep_b ? a : b;
+    const map::LineString& keep = m.lines[line_at.at(keep_id)];
+    const map::LineString& drop = m.lines[line_at.at(drop_id)];
     // Lines that ended at the dropped line's ends end at the kept line's (it runs the other way).
     const Eigen::Vector3d drop_front = drop.points.front(), drop_back = drop.points.back();
     const Eigen::Vector3d keep_front = keep.points.front(), keep_back = keep.points.back();
-    for (auto& l : m.lines) {
-      if (l.id == drop.id || l.id == keep.id || l.points.empty()) continue;
+    std::vector<std::pair<size_t, Points>> moved;  // line index, its points before
+    for (size_t k = 0; k < m.lines.size(); ++k) {
+      auto& l = m.lines[k];
+      if (l.id == drop_id || l.id == keep_id || l.points.empty()) continue;
       for (bool at_front : {true, false}) {
         const Eigen::Vector3d end = at_front ? l.points.front() : l.points.back();
-        if ((end - drop_front).norm() < 1e-6) {
-          moveEnd(l.points, at_front, keep_back - end, o.taper_m);
-        } else if ((end - drop_back).norm() < 1e-6) {
-          moveEnd(l.points, at_front, keep_front - end, o.taper_m);
-        }
+        const bool at_drop_front = (end - drop_front).norm() < 1e-6, at_drop_back = (end - drop_back).norm() < 1e-6;
+        if (!at_drop_front && !at_drop_back) continue;
+        if (moved.empty() || moved.back().first != k) moved.emplace_back(k, l.points);
+        moveEnd(l.points, at_front, (at_drop_front ? keep_back : keep_front) - end, o.taper_m);
       }
     }
-    const int64_t drop_id = drop.id, keep_id = keep.id;
-    for (size_t i : users) {
+    // Every lanelet of the dropped line, and of a line moved, as Lanelet2 will read it; else undone.
+    std::vector<size_t> to_check = lanelets_of_line[drop_id];
+    for (const auto& [k, before] : moved) {
+      const auto& of = lanelets_of_line[m.lines[k].id];
+      to_check.insert(to_check.end(), of.begin(), of.end());
+    }
+    if (!std::all_of(to_check.begin(), to_check.end(), [&](size_t i) { return readAsMeant(i, drop_id, keep_id); })) {
+      for (auto& [k, before] : moved) m.lines[k].points = std::move(before);
+      return;
+    }
+    for (size_t i : lanelets_of_line[drop_id]) {
       auto& ll = m.lanelets[i];
       if (ll.left_id == drop_id) ll.left_id = keep_id;
       if (ll.right_id == drop_id) ll.right_id = keep_id;
+      lanelets_of_line[keep_id].push_back(i);
     }
+    lanelets_of_line.erase(drop_id);
     dropped.insert(drop_id);
   };
   for (const auto& [road_id, lines] : bounds_of_road) {

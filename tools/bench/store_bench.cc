@@ -15,9 +15,9 @@
 #include "core/intersections/intersections.h"
 #include "core/io/speed_limits.h"
 #include "core/mapping/map_assembler.h"
-#include "core/mapping/road_lanes.h"
 #include "core/osm/osm_data.h"
 #include "core/skeleton/skeleton.h"
+#include "tests/common/synthetic_lanes.h"
 
 #include <unistd.h>
 
@@ -36,49 +36,6 @@
 using namespace lanemap;
 
 namespace {
-
-// Two lanes on the right of the road's line, straight segments every 5 m of its stretch.
-map::LaneMap lanesOf(const skeleton::Skeleton& sk, const skeleton::AtomicRoad& road) {
-  map::LaneMap m;
-  m.origin_lat = sk.frame().origin().lat;
-  m.origin_lon = sk.frame().origin().lon;
-  const double s0 = road.s_begin, s1 = std::max(road.s_begin + 1.0, road.s_end);
-  int64_t id = (road.id + 1) * 100000;
-  std::vector<map::LineString> lines(3);
-  for (int k = 0; k < 3; ++k) {
-    lines[k].id = ++id;
-    lines[k].type = k == 1 ? map::LineType::kDashed : map::LineType::kSolid;
-  }
-  std::vector<std::vector<Eigen::Vector3d>> centres(2);
-  const int steps = std::max(1, static_cast<int>((s1 - s0) / 5.0));
-  for (int i = 0; i <= steps; ++i) {
-    const double s = s0 + (s1 - s0) * i / steps;
-    const Eigen::Vector2d p = sk.pointAt(road, s), t = sk.tangentAt(road, s), right(t.y(), -t.x());
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector2d q = p + right * (0.2 + 3.5 * k);
-      lines[k].points.emplace_back(q.x(), q.y(), 0.0);
-    }
-    for (int k = 0; k < 2; ++k) {
-      const Eigen::Vector2d q = p + right * (0.2 + 1.75 + 3.5 * k);
-      centres[k].emplace_back(q.x(), q.y(), 0.0);
-    }
-  }
-  for (int k = 0; k < 2; ++k) {
-    map::Lanelet ll;
-    ll.id = ++id;
-    ll.road_id = road.id;
-    ll.from_node = road.from;
-    ll.to_node = road.to;
-    ll.index_from_left = k;
-    ll.left_id = lines[k].id;
-    ll.right_id = lines[k + 1].id;
-    ll.centre = centres[k];
-    m.lanelets.push_back(ll);
-  }
-  m.lines = lines;
-  mapping::dropMisreadLanelets(m);  // offset lines turned inside out on a tight bend, as the mapper does
-  return m;
-}
 
 double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -133,7 +90,7 @@ int main(int argc, char** argv) {
     const size_t n = std::min(n_wanted, order.size());
     if (n < 2) continue;
     mapping::MapAssembler assembler(sk, {}, data.restrictions);
-    for (size_t i = 0; i + 1 < n; ++i) assembler.setRoad(order[i]->id, lanesOf(sk, *order[i]));
+    for (size_t i = 0; i + 1 < n; ++i) assembler.setRoad(order[i]->id, lanemap::testing::twoStraightLanes(sk, *order[i]));
     assembler.update();
     // The road that closes now: its file and its intersections; then the export; then (as before)
     // every intersection built again. 3 times, the best kept.
@@ -141,7 +98,7 @@ int main(int argc, char** argv) {
     size_t lanelets = 0;
     for (int rep = 0; rep < 3; ++rep) {
       auto t0 = std::chrono::steady_clock::now();
-      map::LaneMap lanes = lanesOf(sk, *order[n - 1]);
+      map::LaneMap lanes = lanemap::testing::twoStraightLanes(sk, *order[n - 1]);
       io::writeLanelet2(lanes, (tmp / "road.osm").string(), write_options);
       road_ms = std::min(road_ms, msSince(t0));
       t0 = std::chrono::steady_clock::now();

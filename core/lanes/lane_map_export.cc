@@ -99,12 +99,20 @@ map::LaneMap toLaneMap(const ExplorationResult& r, double lat, double lon, doubl
   // Two neighbouring lanes share one border line string (Lanelet2 and Autoware: a lane change is
   // possible only between lanelets with a common bound), so their pieces must begin and end at
   // the same s over the stretch they run side by side: each takes the other's cuts there.
+  // Where a stretch ends within 1 m of one lane's end, that end is where the other is cut (a
+  // cut one of them took at the stretch's end and the other not, being too near its end, would
+  // leave one lane in two pieces beside the other's one, and their border drawn twice).
   const std::vector<LaneNeighbours> neighbours = laneNeighbours(r);
+  const auto inside = [&](int lane, double s) { return s > r.lanes[lane].s_begin + 1.0 && s < r.lanes[lane].s_end - 1.0; };
+  const auto nearestEnd = [&](int lane, double s) {
+    const Lane& l = r.lanes[lane];
+    return std::abs(s - l.s_begin) < std::abs(s - l.s_end) ? l.s_begin : l.s_end;
+  };
   for (const auto& nb : neighbours) {
-    addCut(nb.left, nb.s_begin);
-    addCut(nb.left, nb.s_end);
-    addCut(nb.right, nb.s_begin);
-    addCut(nb.right, nb.s_end);
+    for (const double s : {nb.s_begin, nb.s_end}) {
+      addCut(nb.left, inside(nb.right, s) ? s : nearestEnd(nb.right, s));
+      addCut(nb.right, inside(nb.left, s) ? s : nearestEnd(nb.left, s));
+    }
   }
   for (size_t pass = 0; pass <= r.lanes.size(); ++pass) {  // until no cut is new (chains of lanes)
     bool added = false;
@@ -183,7 +191,8 @@ map::LaneMap toLaneMap(const ExplorationResult& r, double lat, double lon, doubl
   const auto sharedBorder = [&](int lane, bool on_right, double a, double b) -> int64_t {
     for (const auto& nb : neighbours) {
       if ((on_right ? nb.left : nb.right) != lane) continue;
-      if (a < nb.s_begin - 1.0 || b > nb.s_end + 1.0) continue;
+      // (up to 2 m beyond it: a stretch that ends within 1 m of a lane's end is not cut there)
+      if (a < nb.s_begin - 2.0 || b > nb.s_end + 2.0) continue;
       const int k = pieceOf(nb.left, a, b);
       if (k < 0 || pieceOf(nb.right, a, b) < 0) continue;
       const auto key = std::tuple{nb.left, nb.right, k};

@@ -3,6 +3,7 @@
 // lane, a two-way road (only our direction's lanes), determinism. Asserted: the lane count and
 // every lane's centre line within 0.15 m RMS of the truth.
 #include "core/io/lanelet2.h"
+#include "core/lanes/carried_lanes.h"
 #include "core/lanes/explorer.h"
 #include "tests/lanes/synthetic_bev.h"
 
@@ -974,6 +975,42 @@ ExplorationResult exploreShort(const Layout& layout, double s_begin, double s_en
   road.s_end = s_end;
   road.two_way = two_way;
   return exploreRoad(grid, road, opt);
+}
+
+// Two lanes side by side from the start of a road (kingsway_junction seed 2, road 39), the right one
+// starting 5 cm later, whose bounds agree only from 1.05 m in: the left lane was cut there (over
+// 1 m from its start), the right one not (under 1 m from its own), so the left lane came out in
+// a 1 m piece and the rest beside the right lane's one piece, and their border was drawn twice
+// (lanemap-check shared_borders). Where a stretch ends within 1 m of one lane's end, that end is
+// where the other is cut: here nowhere, one lanelet each, one shared border.
+TEST(Explorer, NeighboursStartingCentimetresApartShareOneBorderFromTheStart) {
+  const Scenario sc = straightLanes({3.5, 3.5}, 80.0);
+  RoadGeometry road;
+  road.road_id = 39;
+  road.polyline = sc.layout.ref.polyline(2.0);
+  road.s_begin = 15.0;
+  road.s_end = 60.0;
+  ExplorerOptions o;
+  std::vector<CarriedLane> two(2);
+  two[0].d = -1.75;
+  two[1].d = -5.25;
+  two[0].right_type = two[1].left_type = map::LineType::kDashed;
+  ExplorationResult res = carryLanesThrough(road, two, o);
+  ASSERT_EQ(res.lanes.size(), 2u);
+  Lane& left = res.lanes[0];
+  Lane& right = res.lanes[1];
+  ASSERT_GT(right.waypoint_s[1] - right.waypoint_s[0], 1.5);  // way-points ~2 m apart
+  right.s_begin += 0.05;
+  right.waypoint_s[0] += 0.05;
+  left.right.d[0] -= 0.5;  // the left lane's probe of the border 0.5 m off at the start
+  const auto nb = laneNeighbours(res);
+  ASSERT_EQ(nb.size(), 1u);
+  EXPECT_GT(nb[0].s_begin - left.s_begin, 1.0);   // a cut for the left lane (the old rule) ...
+  EXPECT_LT(nb[0].s_begin - right.s_begin, 1.0);  // ... none for the right one
+  const map::LaneMap m = toLaneMap(res);
+  ASSERT_EQ(m.lanelets.size(), 2u);  // one piece each, no 1 m piece
+  EXPECT_EQ(m.lanelets[0].right_id, m.lanelets[1].left_id);
+  EXPECT_EQ(m.lines.size(), 3u);
 }
 
 }  // namespace

@@ -406,7 +406,8 @@ class Builder {
   // `a` pairs with the lane of `d` at its offset from the road's line (the roads' lines continue
   // each other straight on), within
   // offset_match_m and 1 m nearer than any other, in order; empty when the counts agree, nothing
-  // pairs or a lane lies between two (the rules then).
+  // pairs, a lane lies between two, or only some lanes of the road with fewer pair (a lane that
+  // really ends or turns off there, the lines' offsets then half a lane apart: the rules then).
   std::vector<std::pair<int, int>> pairByOffset(const Approach& a, const Approach& d) const {
     std::vector<std::pair<int, int>> out;
     if (a.lanes.size() == d.lanes.size() || o_.offset_match_m <= 0.0) return out;
@@ -425,6 +426,7 @@ class Builder {
       out.emplace_back(i, n.best);
       next = n.best + 1;
     }
+    if (out.size() < std::min(a.lanes.size(), d.lanes.size())) return {};
     return out;
   }
 

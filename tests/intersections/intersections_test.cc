@@ -300,6 +300,37 @@ TEST(IntersectionTopology, StraightOnWithALaneUnmappedPairsByOffset) {
   EXPECT_TRUE(std::count(by_index.begin(), by_index.end(), Pair{2, 0, 3, 0}) == 1) << "k -> k from the left";
 }
 
+// Straight on from three lanes into two (aurora_sausage_link, road 9 -> 8: the right lane turns
+// right into a street the drive did not take): by offset from the ways' lines only the right lane
+// paired (into the right lane), the other two were left to the orphan rule, and the right lane
+// went both straight and right. Pairing by offset is for a lane the drive did not find; when it
+// pairs only some lanes of the road with fewer, the rules decide (k -> k from the left).
+TEST(IntersectionTopology, AnOffsetMatchOfSomeLanesOnlyLeavesThePairingToTheRules) {
+  const lanemap::osm::Tags ow{{"oneway", "yes"}};
+  Net net = crossing(ow, ow, ow, ow);  // northbound S->C->N, eastbound W->C->E
+  const auto sk = net.build();
+  std::map<int64_t, lanemap::map::LaneMap> roads;
+  for (const auto& r : sk.roads()) {
+    LaneSpec spec;
+    spec.lanes = 2;
+    if (r.from == 2 && r.to == 1) spec.lanes = 3;  // S -> C: 3 lanes ...
+    if (r.from == 1 && r.to == 3) spec.width = 3.8;  // ... C -> N: 2 wider ones
+    roads[r.id] = roadLanes(sk, r, spec);
+    if (r.from == 2 && r.to == 1) {  // laterals +3.8, +0.3, -3.2 (northbound: left is -x)
+      for (auto& l : roads[r.id].lines) for (auto& p : l.points) p.x() -= 0.3;
+      for (auto& ll : roads[r.id].lanelets) for (auto& p : ll.centre) p.x() -= 0.3;
+    }
+  }
+  IntersectionOptions o;
+  o.offset_match_m = 1.5;
+  const auto pairs = pairsOf(sk, buildIntersection(sk, 1, roads, o, net.data.restrictions));
+  const auto has = [&](const Pair& p) { return std::count(pairs.begin(), pairs.end(), p) == 1; };
+  EXPECT_TRUE(has(Pair{2, 0, 3, 0}));
+  EXPECT_TRUE(has(Pair{2, 1, 3, 1}));
+  EXPECT_FALSE(has(Pair{2, 2, 3, 1})) << "the right lane straight on into N's right lane too";
+  EXPECT_TRUE(has(Pair{2, 2, 5, 1}));  // it turns right
+}
+
 TEST(IntersectionTopology, TurnLanesDecideWhichLanesTurn) {
   const lanemap::osm::Tags s{{"lanes:forward", "3"}, {"lanes:backward", "1"},
                              {"turn:lanes:forward", "left|through|through;right"}};

@@ -148,6 +148,40 @@ TEST(EvalTool, TheBenchmarkTableSaysWhereTheMissesAre) {
   EXPECT_EQ(m2["pairs_missed_lane"].get<int>() + m2["pairs_wrong_lane"].get<int>(), 0);
   EXPECT_NE(r.output.find("misses: truth lanes"), std::string::npos) << r.output;
 
+  // lanemap-check's verdict on each map (quality.sh keeps it as check-LABEL.txt): the table counts
+  // the maps whose check failed, as its exit status says, and each failed requirement. Drive 1's
+  // map gets a lane drawn twice, the second's left bound its own line 2 cm off the first's
+  // (shared_borders fails).
+  {
+    auto twice = built[0];
+    ASSERT_FALSE(twice.lanelets.empty());
+    auto lane = twice.lanelets.front();
+    auto copy = *std::find_if(twice.lines.begin(), twice.lines.end(), [&](const auto& l) { return l.id == lane.left_id; });
+    copy.id = 999999;
+    for (auto& p : copy.points) p.y() += 0.02;
+    twice.lines.push_back(copy);
+    lane.id = 999998;
+    lane.left_id = copy.id;
+    lane.successors.clear();
+    twice.lanelets.push_back(lane);
+    lanemap::io::writeLanelet2(twice, dir.str("net-s1/built.osm"));
+  }
+  int failing = 0;
+  for (int k = 1; k <= 3; ++k) {
+    const std::string d = dir.str("net-s" + std::to_string(k));
+    const auto chk = runCommand(binPath("lanemap-check") + " " + d + "/built.osm > " + d + "/check-test.txt 2>&1");
+    failing += chk.exit_code != 0;
+  }
+  const auto rc = runCommand("python3 " + dataPath("../tools/bench/quality_table.py") + " " + dir.str("") + " test");
+  ASSERT_EQ(rc.exit_code, 0) << rc.output;
+  std::ifstream qc(dir.str("quality.json"));
+  const auto check = nlohmann::json::parse(qc)["test"]["lanemap_check"];
+  EXPECT_EQ(check["maps"].get<int>(), 3);
+  EXPECT_EQ(check["failing"].get<int>(), failing);
+  EXPECT_GE(failing, 1);
+  EXPECT_GE(check["requirements"].value("shared_borders", 0), 1) << check.dump();
+  EXPECT_NE(rc.output.find("lanemap-check: " + std::to_string(failing) + " of 3 maps fail"), std::string::npos) << rc.output;
+
   // --compare A B: the networks whose figures differ, A's row above B's. Label "b" is "test" with
   // drive 3's report replaced by drive 1's; a second network ("other") has the same report under
   // both and is not listed.

@@ -101,6 +101,9 @@ run_one() {
     "$bin/lanemap-eval" -q --truth "$d/drive/groundtruth.osm" --map "$d/map-$m/map.osm" \
       --driven "$d/drive/scenario.json" --json "$d/eval-$m.json" >"$d/eval-$m.log" 2>&1 ||
       echo "   $name ($m): lanemap-eval failed (see $d/eval-$m.log)"
+    # Autoware's map requirements (lanemap-check): the table counts the maps that fail one.
+    rm -f "$d/check-$m.txt"
+    [ -f "$d/map-$m/FAILED" ] || "$bin/lanemap-check" "$d/map-$m/map.osm" >"$d/check-$m.txt" 2>&1 || true
   done
   echo "   $name done"
 }

@@ -15,6 +15,11 @@ missed and the built pairs wrong, split by whether both of their lanes were dete
 a lane not found cannot be right: lane recall bounds junction recall). quality.json has the same
 per network under "misses".
 
+Below that, the maps that fail one of lanemap-check's requirements (Autoware's, beyond
+Lanelet2's validator: shared borders, bounds apart, ...), from the check-LABEL.txt quality.sh
+keeps beside each map: how many of the maps checked, and which requirements (quality.json:
+"lanemap_check").
+
 With --trained-on a,b,c (the networks whose frames the segmentation model was trained on;
 quality.sh passes TRAINED_ON) two more pooled rows for the model's labels split the networks by
 whether the model saw them. (The shipped model's Monaco frames came from seeds 1-40, the
@@ -98,6 +103,22 @@ def misses_line(m):
             f"({m.get('built_false_matched', 0)} matched a truth lane); truth pairs {pairs} "
             f"({m.get('pairs_missed_lane', 0)} with a lane not detected); wrong pairs {wrong} "
             f"({m.get('pairs_wrong_both_detected', 0)} between detected lanes)")
+
+
+def lanemap_check(out, drives, lab):
+    """The maps of `lab` that lanemap-check failed (its FAIL lines in check-LAB.txt), by requirement."""
+    maps, failing, requirements = 0, 0, {}
+    for d in drives:
+        p = os.path.join(out, d, f"check-{lab}.txt")
+        if not os.path.exists(p):
+            continue
+        maps += 1
+        with open(p) as f:
+            failed = [line.split()[1] for line in f if line.startswith("FAIL") and len(line.split()) > 1]
+        failing += bool(failed)
+        for r in failed:
+            requirements[r] = requirements.get(r, 0) + 1
+    return {"maps": maps, "failing": failing, "requirements": requirements}
 
 
 def add(a, b):
@@ -225,6 +246,11 @@ def main():
         beat = [n for n, c in per_net.items() if beats_paper(c)]
         print(f"   networks that beat the paper on lane P/R and junction P/R: {len(beat)} of {len(per_net)}")
         print(misses_line(total_misses))
+        check = lanemap_check(out, drives, lab)
+        if check["maps"]:
+            result[lab]["lanemap_check"] = check
+            which = ", ".join(f"{k} {v}" for k, v in sorted(check["requirements"].items()))
+            print(f"   lanemap-check: {check['failing']} of {check['maps']} maps fail a requirement" + (f" ({which})" if which else ""))
     for pair in compare:
         print_comparison(result, *pair)
     clean = lambda v: {k: clean(x) for k, x in v.items()} if isinstance(v, dict) else (

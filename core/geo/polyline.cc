@@ -2,6 +2,7 @@
 #include "core/geo/polyline.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace lanemap::geo {
@@ -22,6 +23,24 @@ double polylineLengthXy(const std::vector<Eigen::Vector3d>& pts) {
   double len = 0.0;
   for (size_t i = 1; i < pts.size(); ++i) len += (pts[i] - pts[i - 1]).head<2>().norm();
   return len;
+}
+
+std::vector<Eigen::Vector2d> pointsEvery(const std::vector<Eigen::Vector2d>& pl, double step) {
+  std::vector<Eigen::Vector2d> out;
+  for (size_t i = 0; i + 1 < pl.size(); ++i) {
+    const double len = (pl[i + 1] - pl[i]).norm();
+    const int n = std::max(1, static_cast<int>(std::ceil(len / step)));
+    for (int k = 0; k < n; ++k) out.push_back(pl[i] + (pl[i + 1] - pl[i]) * (static_cast<double>(k) / n));
+  }
+  if (!pl.empty()) out.push_back(pl.back());
+  return out;
+}
+
+std::vector<Eigen::Vector2d> pointsEveryXy(const std::vector<Eigen::Vector3d>& pl, double step) {
+  std::vector<Eigen::Vector2d> xy;
+  xy.reserve(pl.size());
+  for (const auto& p : pl) xy.push_back(p.head<2>());
+  return pointsEvery(xy, step);
 }
 
 namespace {

@@ -1,6 +1,6 @@
 // Polyline helpers shared by the mapping, the simulator, the evaluation and the map writers: the
 // length of a polyline (in the plane, in 3-D, or of a 3-D polyline's xy projection), a point's
-// distance to one, and the plane cross product and unit vector.
+// distance to one, points along one, and the plane cross product and unit vector.
 #pragma once
 
 #include <Eigen/Core>
@@ -19,6 +19,11 @@ double polylineLengthXy(const std::vector<Eigen::Vector3d>& pts);
 // +infinity). The Xy form measures a 3-D polyline's projection on the xy plane.
 double distanceToPolyline(const std::vector<Eigen::Vector2d>& pl, const Eigen::Vector2d& p);
 double distanceToPolylineXy(const std::vector<Eigen::Vector3d>& pl, const Eigen::Vector2d& p);
+
+// Points at most `step` apart along the polyline: its vertices, and each segment cut into the
+// fewest equal parts no longer than step. The Xy form samples a 3-D polyline's xy projection.
+std::vector<Eigen::Vector2d> pointsEvery(const std::vector<Eigen::Vector2d>& pl, double step);
+std::vector<Eigen::Vector2d> pointsEveryXy(const std::vector<Eigen::Vector3d>& pl, double step);
 
 // The z component of the 3-D cross product of a and b: > 0 when b turns left of a.
 inline double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }

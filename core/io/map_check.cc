@@ -96,18 +96,6 @@ bool insidePolygon(const Polyline& ring, const Eigen::Vector2d& p) {
   return in;
 }
 
-// Points every `step` metres along a polyline (its vertices included).
-Polyline samples(const Polyline& pl, double step) {
-  Polyline out;
-  for (size_t i = 0; i + 1 < pl.size(); ++i) {
-    const double len = (pl[i + 1] - pl[i]).norm();
-    const int n = std::max(1, static_cast<int>(std::ceil(len / step)));
-    for (int k = 0; k < n; ++k) out.push_back(pl[i] + (pl[i + 1] - pl[i]) * (static_cast<double>(k) / n));
-  }
-  if (!pl.empty()) out.push_back(pl.back());
-  return out;
-}
-
 }  // namespace
 
 std::vector<CheckResult> checkLanelet2Map(const std::string& path, const MapCheckOptions& options) {
@@ -235,12 +223,12 @@ std::vector<CheckResult> checkLanelet2Map(const std::string& path, const MapChec
     for (int64_t w : bounds) {
       shapes[w] = polyline(w);
       std::set<int64_t> cells;
-      for (const auto& p : samples(shapes[w], 0.5 * cell)) cells.insert(key(p));
+      for (const auto& p : geo::pointsEvery(shapes[w], 0.5 * cell)) cells.insert(key(p));
       for (int64_t k : cells) grid[k].push_back(w);
     }
     std::set<int64_t> bad;
     for (int64_t w : bounds) {
-      const auto s = samples(shapes[w], 1.0);
+      const auto s = geo::pointsEvery(shapes[w], 1.0);
       if (s.size() < 3) continue;
       std::map<int64_t, size_t> close;  // other way -> samples within 0.1 m
       for (const auto& p : s) {

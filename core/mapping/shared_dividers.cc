@@ -15,21 +15,9 @@ namespace {
 
 using Points = std::vector<Eigen::Vector3d>;
 
-// Points every metre at most along a line, its vertices included.
-std::vector<Eigen::Vector2d> everyMetre(const Points& pl) {
-  std::vector<Eigen::Vector2d> out;
-  for (size_t i = 0; i + 1 < pl.size(); ++i) {
-    const Eigen::Vector2d a = pl[i].head<2>(), b = pl[i + 1].head<2>();
-    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm())));
-    for (int k = 0; k < n; ++k) out.push_back(a + (b - a) * (static_cast<double>(k) / n));
-  }
-  if (!pl.empty()) out.push_back(pl.back().head<2>());
-  return out;
-}
-
-// The share of `a`'s points (every metre) within tolerance_m of `b`.
+// The share of `a`'s points (every metre, as lanemap-check samples) within tolerance_m of `b`.
 double shareOn(const Points& a, const Points& b, double tolerance_m) {
-  const auto s = everyMetre(a);
+  const auto s = geo::pointsEveryXy(a, 1.0);
   if (s.empty()) return 0.0;
   size_t on = 0;
   for (const auto& p : s) on += geo::distanceToPolylineXy(b, p) <= tolerance_m;

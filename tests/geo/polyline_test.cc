@@ -23,5 +23,21 @@ TEST(Polyline, DistanceToItsNearestSegment) {
   EXPECT_DOUBLE_EQ(distanceToPolylineXy({{1, 1, 9}}, {4, 5}), 5.0);
 }
 
+// Points at most `step` apart: the vertices, each segment in the fewest equal parts (shared by
+// lanemap-check's shared_borders and the divider merge, so both sample a line alike).
+TEST(Polyline, PointsEveryStepKeepTheVerticesAndCutEachSegmentEvenly) {
+  const std::vector<Eigen::Vector2d> l = {{0, 0}, {2.5, 0}, {2.5, 1}};
+  const auto p = pointsEvery(l, 1.0);
+  const std::vector<Eigen::Vector2d> want = {{0, 0}, {2.5 / 3, 0}, {5.0 / 3, 0}, {2.5, 0}, {2.5, 1}};
+  ASSERT_EQ(p.size(), want.size());
+  for (size_t i = 0; i < p.size(); ++i) EXPECT_NEAR((p[i] - want[i]).norm(), 0.0, 1e-12) << i;
+  EXPECT_EQ(pointsEvery({{3, 4}}, 1.0).size(), 1u);
+  EXPECT_TRUE(pointsEvery({}, 1.0).empty());
+  // A 3-D line: its xy projection, heights ignored (a 0.9 m step in height adds no point).
+  const auto q = pointsEveryXy({{0, 0, 0}, {1, 0, 0.9}}, 1.0);
+  ASSERT_EQ(q.size(), 2u);
+  EXPECT_NEAR((q[1] - Eigen::Vector2d(1, 0)).norm(), 0.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace lanemap::geo

@@ -489,17 +489,18 @@ class Builder {
     }
     // Two connections side by side between lanes that share their border (toLaneMap) share
     // their border too: the bound of an earlier connection of this intersection with the same ends.
-    const int64_t shared_left = connectorLineBetween(left.points);
-    const int64_t shared_right = connectorLineBetween(right.points);
+    const map::LineString* shared_left = connectorLineBetween(left.points);
+    const map::LineString* shared_right = connectorLineBetween(right.points);
     // (Read with the shared bound, a short connection whose own bounds Lanelet2 reads as meant
     // only just can be misread: not built either.)
-    if ((shared_left >= 0 || shared_right >= 0) &&
-        !io::orientationProblem(ll, shared_left >= 0 ? lineOf(shared_left) : left, shared_right >= 0 ? lineOf(shared_right) : right).empty()) {
+    if ((shared_left || shared_right) &&
+        !io::orientationProblem(ll, shared_left ? *shared_left : left, shared_right ? *shared_right : right).empty()) {
       result_.not_built.push_back({a.road->id, i, d.road->id, o});
       return false;
     }
-    left.id = shared_left >= 0 ? shared_left : next_id_++;
-    right.id = shared_right >= 0 ? shared_right : next_id_++;
+    left.id = shared_left ? shared_left->id : next_id_++;
+    right.id = shared_right ? shared_right->id : next_id_++;
+    const bool own_left = !shared_left, own_right = !shared_right;  // (the pointers die with the next push)
     ll.id = next_id_++;
     ll.kind = map::LaneletKind::kIntersection;
     ll.left_id = left.id;
@@ -521,24 +522,19 @@ class Builder {
     c.orphan = orphan;
     c.passages = shaped_by;
     result_.connections.push_back(c);
-    if (shared_left < 0) result_.map.lines.push_back(std::move(left));
-    if (shared_right < 0) result_.map.lines.push_back(std::move(right));
+    if (own_left) result_.map.lines.push_back(std::move(left));
+    if (own_right) result_.map.lines.push_back(std::move(right));
     result_.map.lanelets.push_back(std::move(ll));
     return true;
-  }
-
-  // A line built so far in this intersection, by id (one connectorLineBetween found).
-  const map::LineString& lineOf(int64_t id) const {
-    return *std::find_if(result_.map.lines.begin(), result_.map.lines.end(), [&](const map::LineString& l) { return l.id == id; });
   }
 
   // The bound of a connection built so far in this intersection that runs the way `pts` does: the
   // same ends, each within 5 cm (the writer's node merge distance), and its middle point (by arc
   // length) within 10 cm (lines closer are one border drawn twice: lanemap-check's
-  // shared_borders), or -1. (Two bounds between the same ends differ where one connection was
-  // shaped by a passage and the other kept its Bezier.)
-  int64_t connectorLineBetween(const std::vector<Vector3d>& pts) const {
-    if (pts.size() < 2) return -1;
+  // shared_borders), or nullptr. (Two bounds between the same ends differ where one connection was
+  // shaped by a passage and the other kept its Bezier.) Valid until a line is added.
+  const map::LineString* connectorLineBetween(const std::vector<Vector3d>& pts) const {
+    if (pts.size() < 2) return nullptr;
     const auto middle = [](const std::vector<Vector3d>& p) {
       std::vector<Vector2d> q;
       for (const auto& v : p) q.push_back(v.head<2>());
@@ -549,10 +545,10 @@ class Builder {
       if (line.points.size() < 2) continue;
       if ((line.points.front().head<2>() - pts.front().head<2>()).norm() < 0.05 &&
           (line.points.back().head<2>() - pts.back().head<2>()).norm() < 0.05 && (middle(line.points) - mid).norm() < 0.1) {
-        return line.id;
+        return &line;
       }
     }
-    return -1;
+    return nullptr;
   }
 
   // The lanes the car drove from road a to road d (driven_passage.h): per path of that road pair,

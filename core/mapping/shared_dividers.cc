@@ -4,7 +4,6 @@
 #include "core/io/lanelet2_orientation.h"
 
 #include <algorithm>
-#include <cmath>
 #include <map>
 #include <set>
 #include <unordered_map>

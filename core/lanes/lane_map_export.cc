@@ -88,9 +88,10 @@ map::LaneMap toLaneMap(const ExplorationResult& r, double lat, double lon, doubl
   // Cut points of every lane: where a lane splits off it or merges into it.
   std::vector<std::vector<double>> cuts(r.lanes.size());
   for (size_t i = 0; i < r.lanes.size(); ++i) cuts[i] = {r.lanes[i].s_begin, r.lanes[i].s_end};
+  // A cut within 1 m of a lane's end is none (the end is a cut already).
+  const auto inside = [&](int lane, double s) { return s > r.lanes[lane].s_begin + 1.0 && s < r.lanes[lane].s_end - 1.0; };
   auto addCut = [&](int lane, double s) {
-    const Lane& l = r.lanes[lane];
-    if (s > l.s_begin + 1.0 && s < l.s_end - 1.0) cuts[lane].push_back(s);
+    if (inside(lane, s)) cuts[lane].push_back(s);
   };
   for (const Lane& l : r.lanes) {
     if (l.split_from >= 0) addCut(l.split_from, l.s_begin);
@@ -103,7 +104,6 @@ map::LaneMap toLaneMap(const ExplorationResult& r, double lat, double lon, doubl
   // cut one of them took at the stretch's end and the other not, being too near its end, would
   // leave one lane in two pieces beside the other's one, and their border drawn twice).
   const std::vector<LaneNeighbours> neighbours = laneNeighbours(r);
-  const auto inside = [&](int lane, double s) { return s > r.lanes[lane].s_begin + 1.0 && s < r.lanes[lane].s_end - 1.0; };
   const auto nearestEnd = [&](int lane, double s) {
     const Lane& l = r.lanes[lane];
     return std::abs(s - l.s_begin) < std::abs(s - l.s_end) ? l.s_begin : l.s_end;

@@ -194,6 +194,110 @@ void markUnnamedLanes(Raster& r, const ExplorerOptions& o, bool two_way) {
   }
 }
 
+// A lane beyond the outermost dashed line. A dashed line only ever separates two lanes of one
+// direction, yet the carriageway walk can end our carriageway right at one: the lanes of a road
+// seen only from the junction before it are background (the lane classes are relative to the
+// ego lane, and the car was not in this road's cross-section yet), i.e. blocked, and so is a lane
+// beyond the segmentation's +-2 classes; with no line seen on the far side of such a lane,
+// markUnnamedLanes has no strip between two lines, and the walk puts it outside. Per bin of
+// divider_bin_m along s: a dashed line (dashes in 10 % of the bin's rows) with a lane on its near
+// side (the next painted line lane_width_min_m to lane_width_max_m away) and, within
+// carriageway_wall_m beyond it, ground the walk put outside that was seen blocked (in half the
+// bin's rows), and nothing painted within two lane widths beyond it (a line or kerb there bounds
+// either a strip between two lines, markUnnamedLanes' to decide, or a hard shoulder wider than a
+// lane), has a lane as wide as the near one beyond it: that strip's blocked cells become
+// drivable and its other cells what they were before the walk, up to a curb or a solid line.
+// Beyond the strip all stays outside, so the lane inferred is bounded and its particles cannot
+// wander. `before_walk`: the raster's codes before the carriageway walk (a two-way road's divider
+// is already outside there, so no lane is put beyond it).
+void markBlockedLanesBeyondDashedEdges(Raster& r, const std::vector<uint8_t>& before_walk, const ExplorerOptions& o) {
+  const int bin_rows = std::max(1, static_cast<int>(std::round(o.divider_bin_m / r.res)));
+  const int min_cols = static_cast<int>(std::round(o.lane_width_min_m / r.res));
+  const int max_cols = static_cast<int>(std::round(o.lane_width_max_m / r.res));
+  const int tol = std::max(0, static_cast<int>(std::round(o.line_tolerance_m / r.res)));
+  const int reach = std::max(tol, static_cast<int>(std::round(o.carriageway_wall_m / r.res)));
+  auto walled_off = [&](int i, int j) {
+    const size_t k = static_cast<size_t>(i) * r.nd + j;
+    return r.code[k] == kOutside && before_walk[k] == kBlocked;
+  };
+  std::vector<float> dashed(r.nd), edge(r.nd), beyond(r.nd), line_before(r.nd);
+  for (int i0 = 0; i0 < r.ns; i0 += bin_rows) {
+    const int i1 = std::min(r.ns, i0 + bin_rows);
+    const float n = static_cast<float>(i1 - i0);
+    std::fill(dashed.begin(), dashed.end(), 0.0f);
+    std::fill(edge.begin(), edge.end(), 0.0f);
+    std::fill(beyond.begin(), beyond.end(), 0.0f);
+    std::fill(line_before.begin(), line_before.end(), 0.0f);
+    for (int i = i0; i < i1; ++i) {
+      for (int j = 0; j < r.nd; ++j) {
+        const uint8_t c = r.at(i, j);
+        dashed[j] += c == kDashed;
+        edge[j] += c == kSolid || c == kCurb;
+        beyond[j] += walled_off(i, j);
+        const uint8_t b = before_walk[static_cast<size_t>(i) * r.nd + j];
+        line_before[j] += b == kSolid || b == kCurb ? 1.0f : b == kDashed ? 3.0f : 0.0f;  // (dashes: 10 % is a line)
+      }
+    }
+    // Dashed runs of the bin (columns with dashes in 10 % of its rows, neighbours joined).
+    struct Run { int j0, j1; };
+    std::vector<Run> runs;
+    for (int j = 0; j < r.nd; ++j) {
+      if (dashed[j] < 0.1f * n) continue;
+      if (!runs.empty() && runs.back().j1 >= j - 1) runs.back().j1 = j;
+      else runs.push_back({j, j});
+    }
+    auto is_line = [&](int j) { return dashed[j] >= 0.1f * n || edge[j] >= 0.3f * n; };
+    for (const Run& run : runs) {
+      for (int dir : {-1, 1}) {
+        const int first = dir > 0 ? run.j1 + 1 : run.j0 - 1;  // the first column beyond the line
+        if (first < 0 || first >= r.nd) continue;
+        // Beyond: walled off (seen blocked, put outside by the walk) in half the rows, within
+        // carriageway_wall_m of the line.
+        bool walled = false;
+        for (int m = 0; m <= reach && !walled; ++m) {
+          const int j = first + dir * m;
+          walled = j >= 0 && j < r.nd && beyond[j] >= 0.5f * n;
+        }
+        if (!walled) continue;
+        // Nothing painted beyond within two lanes: a line or kerb there bounds a strip that is
+        // either a lane between two lines (markUnnamedLanes' to decide) or wider than a lane (a
+        // hard shoulder), not a lane as wide as the near one.
+        // (From past the columns of the dashed line itself, which the walk may have put outside.)
+        int m0 = 0;
+        while (m0 <= reach && first + dir * m0 >= 0 && first + dir * m0 < r.nd && line_before[first + dir * m0] >= 0.3f * n) ++m0;
+        bool far_line = false;
+        for (int m = m0; m <= m0 + 2 * max_cols && !far_line; ++m) {
+          const int j = first + dir * m;
+          far_line = j >= 0 && j < r.nd && line_before[j] >= 0.3f * n;
+        }
+        if (far_line) continue;
+        // Near side: a lane, from this line to the next painted line.
+        const int near0 = dir > 0 ? run.j0 - 1 : run.j1 + 1;
+        int width = -1;
+        for (int j = near0; j >= 0 && j < r.nd; j -= dir) {
+          if (std::abs(j - near0) > max_cols) break;
+          if (is_line(j)) {
+            width = std::abs(j - near0) + 1;
+            break;
+          }
+        }
+        if (width < min_cols || width > max_cols) continue;
+        for (int i = i0; i < i1; ++i) {
+          for (int j = first, k = 0; j >= 0 && j < r.nd && k < width; j += dir, ++k) {
+            const size_t idx = static_cast<size_t>(i) * r.nd + j;
+            const uint8_t was = before_walk[idx];
+            if (was == kCurb || was == kSolid) break;
+            if (r.code[idx] == kBlocked) r.code[idx] = kDrivable;
+            if (r.code[idx] != kOutside) continue;
+            if (was == kBlocked) r.code[idx] = kDrivable;
+            else if (was == kUnobserved || was == kDrivable || was == kDashed || was == kSeparation) r.code[idx] = was;
+          }
+        }
+      }
+    }
+  }
+}
+
 Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const RoadGeometry& road, const ExplorerOptions& o) {
   Raster r;
   r.res = grid.resolution();
@@ -298,6 +402,7 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
   // an exit ramp the line follows), so which side is this road's cannot be told. Beyond the wall
   // or kerb lie other roads (the other carriageway of a dual road, a parallel street) that are
   // not this road's lanes. A parked car fills few rows of a bin and is no wall.
+  const std::vector<uint8_t> before_walk = o.blocked_lane_beyond_dashed_edge ? r.code : std::vector<uint8_t>();
   {
     const int bin_rows = std::max(1, static_cast<int>(std::round(o.divider_bin_m / r.res)));
     const int wall_cols = std::max(1, static_cast<int>(std::round(o.carriageway_wall_m / r.res)));
@@ -355,6 +460,7 @@ Raster buildRaster(const bev::BevGrid& grid, const FrenetFrame& frame, const Roa
       }
     }
   }
+  if (o.blocked_lane_beyond_dashed_edge) markBlockedLanesBeyondDashedEdges(r, before_walk, o);
   // Again, now that our carriageway's outer edges are known too (a lane beside a wall the curb of
   // which was not seen).
   if (o.unnamed_lanes) markUnnamedLanes(r, o, road.two_way);

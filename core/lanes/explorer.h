@@ -14,7 +14,12 @@
 //    wide between painted lines (one dashed, or drivable somewhere along the bin, or holding a one-way road's line, or beside a two-way road's divider; a kerb at a slant
 //    to the frame counts within line_tolerance_m) is a lane the segmentation does not name (beyond its +-2 lane classes, or seen from the junction
 //    before the road: the lane classes are the ego lane's cross-section's only). Only the
-//    explored stretch kills a particle (past the ROI edges lie the junctions). A road whose stretch between its ROIs is shorter than
+//    explored stretch kills a particle (past the ROI edges lie the junctions). Our carriageway ends
+//    at the first wall (blocked ground a metre wide) or kerb either side: beyond it is outside; but
+//    where the walk stopped at a dashed line with ground seen blocked beyond it (a road seen from
+//    the junction before it, whose far lanes have no line the camera caught), a lane as wide as
+//    the one on its near side is put back beyond it (markBlockedLanesBeyondDashedEdges,
+//    blocked_lane_beyond_dashed_edge). A road whose stretch between its ROIs is shorter than
 //    short_road_min_m is explored over that much around its middle (explorationStretch).
 // 2. Particle filter: N car footprints (3 m x 1.5 m) start as a strip across the road start and
 //    move by the paper's motion model (Eq. 5) with v ~ U(0.9, 1.1), w ~ U(-0.2, 0.2) per particle

@@ -50,6 +50,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("unnamed_lanes", o.unnamed_lanes);
   r.read("lane_width_min_m", o.lane_width_min_m);
   r.read("lane_width_max_m", o.lane_width_max_m);
+  r.read("blocked_lane_beyond_dashed_edge", o.blocked_lane_beyond_dashed_edge);
   r.read("line_tolerance_m", o.line_tolerance_m);
   r.read("birth_every_m", o.birth_every_m);
   r.read("birth_min_free_m", o.birth_min_free_m);

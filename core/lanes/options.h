@@ -71,6 +71,10 @@ struct ExplorerOptions {
   double lane_width_max_m = 4.6;         // ... at most
   double line_tolerance_m = 0.3;         // ... a solid line or curb within this of a column in a row
                                          //   counts for that column (lines at a slant to the frame)
+  bool blocked_lane_beyond_dashed_edge = true;  // the carriageway walk stopped at a dashed line with
+                                         //   ground seen blocked beyond it: a lane as wide as the one
+                                         //   on its near side lies beyond it (explorer.cc
+                                         //   markBlockedLanesBeyondDashedEdges)
 
   // --- clustering and lanes ---
   double dbscan_eps_m = 1.0;             // the paper's value

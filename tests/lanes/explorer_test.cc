@@ -368,6 +368,10 @@ TEST(Explorer, AFarLaneGlimpsedMidRoadIsNoLane) {
   const double e1 = 10.5 / 2 - 3.5;  // the dashed line between the left and the middle lane
   sc.layout.boxes = {{0.0, 130.0, e1 + 0.2, 7.0}, {170.0, 300.0, e1 + 0.2, 7.0}};
   ExplorerOptions o;
+  // (Where the left lane is ground seen blocked beyond the dashed line, with no line on its far
+  // side, blocked_lane_beyond_dashed_edge makes it the lane it is, whole: checked below. Here the
+  // glimpse alone.)
+  o.blocked_lane_beyond_dashed_edge = false;
   for (const double split_neighbour_m : {o.split_neighbour_m, 3.0}) {
     o.split_neighbour_m = split_neighbour_m;
     const Report rep = run(sc, 1, o);
@@ -378,6 +382,7 @@ TEST(Explorer, AFarLaneGlimpsedMidRoadIsNoLane) {
   // Without the rule the glimpse is a lane of its own: the left lane, over the 40 m seen, out of
   // the middle lane and back into it.
   ExplorerOptions off;
+  off.blocked_lane_beyond_dashed_edge = false;
   off.floating_lane_max_m = 0.0;
   const Report all = run(sc, 1, off);
   ASSERT_EQ(all.result.lanes.size(), 3u);
@@ -389,6 +394,11 @@ TEST(Explorer, AFarLaneGlimpsedMidRoadIsNoLane) {
     EXPECT_GE(l.split_from, 0);
     EXPECT_EQ(l.split_from, l.merges_into);
   }
+  // With the defaults: the ground left of the dashed line is walled off as blocked, nothing is
+  // painted beyond it, so the left lane lies there along the whole road.
+  const Report whole = run(sc);
+  expectLanes(whole, sc);
+  for (const Lane& l : whole.result.lanes) EXPECT_GT(l.s_end - l.s_begin, 280.0) << "lane " << l.id;
 }
 
 TEST(Explorer, HundredMetresWithoutMarkings) {
@@ -692,6 +702,50 @@ void shortRoadSeenFromTheJunction(const std::vector<double>& widths) {
 
 TEST(Explorer, ShortRoadSeenFromTheJunctionTwoLanes) { shortRoadSeenFromTheJunction({3.5, 3.4}); }
 TEST(Explorer, ShortRoadSeenFromTheJunctionOneLane) { shortRoadSeenFromTheJunction({3.5}); }
+
+// Issue 16, the benchmark's Fremantle loop: a one-way road of three lanes, 33 m between close
+// junctions (ROIs leave s 15-29.8), entered in its right lane after a turn. Its left lane was seen
+// only from the junction before it, where the lane classes (relative to the ego lane's
+// cross-section) call it background: observed, never drivable, i.e. blocked, and neither its far
+// edge line nor the kerb beyond were caught. The dashed line between it and the middle lane was.
+// A dashed line only separates two lanes of one direction: the left lane is found, as wide as the
+// middle one, within 0.3 m of its centre, over the whole stretch; without the rule the carriageway
+// walk ends our carriageway at that dashed line, and two lanes are found.
+TEST(Explorer, ALaneSeenOnlyFromTheJunctionBeyondADashedLine) {
+  const std::vector<double> widths{3.4, 3.5, 3.3};
+  Scenario sc = straightLanes(widths, 33.0);
+  const double e0 = (3.4 + 3.5 + 3.3) / 2, e1 = e0 - 3.4;
+  auto& lines = sc.layout.lines;
+  lines.erase(std::remove_if(lines.begin(), lines.end(), [&](const Line& l) { return l.d(0) > e1 + 0.1; }), lines.end());
+  sc.layout.areas[0].dhi = constant(e1 - 0.1);  // drivable: the middle and the right lane only
+  RoadGeometry road;
+  road.road_id = 13;
+  road.polyline = sc.layout.ref.polyline(2.0);
+  road.s_begin = 15.0;
+  road.s_end = 29.8;
+  const bev::BevGrid grid = paint(sc.layout);
+  const ExplorationResult res = exploreRoad(grid, road, {});
+  ASSERT_EQ(res.lanes.size(), widths.size());
+  std::set<int> found;
+  for (const Lane& l : res.lanes) {
+    EXPECT_NEAR(l.s_begin, road.s_begin, 0.5) << "lane " << l.id;
+    EXPECT_NEAR(l.s_end, road.s_end, 0.5) << "lane " << l.id;
+    ASSERT_GE(l.index_from_left, 0);
+    ASSERT_LT(l.index_from_left, static_cast<int>(sc.truth.size()));
+    found.insert(l.index_from_left);
+    const double truth_d = sc.truth[l.index_from_left].d(0);
+    for (const auto& p : l.waypoints) EXPECT_NEAR(sc.layout.ref.toSD(p).y(), truth_d, 0.3) << "lane " << l.id;
+  }
+  EXPECT_EQ(found.size(), widths.size());
+  ExplorerOptions off;
+  off.blocked_lane_beyond_dashed_edge = false;
+  EXPECT_EQ(exploreRoad(grid, road, off).lanes.size(), 2u) << "without the rule the walk ends at the dashed line";
+  // A kerb seen 6 m beyond that dashed line (a hard shoulder, not a lane as wide as the middle
+  // one): no lane is put there.
+  Scenario shoulder = sc;
+  shoulder.layout.lines.push_back({constant(e1 + 6.0), -1e9, 1e9, Line::kCurb, false});
+  EXPECT_EQ(exploreRoad(paint(shoulder.layout), road, {}).lanes.size(), 2u) << "a shoulder 6 m wide is no lane";
+}
 
 // Issue 16, a multi-lane highway (the benchmark's Arizona case): the left lane, seen far off, is
 // sprayed with its smeared dashed line (5 % of its cells, 0.3 % in a 30 m window every 45 m), so

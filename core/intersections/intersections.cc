@@ -482,8 +482,11 @@ class Builder {
     left.points.back() = to.left;
     right.points.front() = from.right;
     right.points.back() = to.right;
-    // Nor one whose centre line leaves its lanelet (lane ends that nearly overlap make it hook).
-    if (!io::orientationProblem(ll, left, right).empty() || centreLeavesOutline(pts, bounds.left, bounds.right)) {
+    // Nor one whose centre line leaves its lanelet (lane ends that nearly overlap make it hook), nor
+    // one a bound of which Lanelet2 would turn (around a tight corner, the inner lane ends
+    // overlapping: the inner bound's end lies behind its start).
+    if (!io::orientationProblem(ll, left, right).empty() || centreLeavesOutline(pts, bounds.left, bounds.right) ||
+        io::boundTurnedOnLoad(left, right)) {
       result_.not_built.push_back({a.road->id, i, d.road->id, o});
       return false;
     }

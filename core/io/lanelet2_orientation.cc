@@ -94,6 +94,18 @@ std::string orientationProblem(const map::Lanelet& ll, const map::LineString& le
   return {};
 }
 
+bool boundTurnedOnLoad(const map::LineString& left, const map::LineString& right) {
+  if (left.points.size() < 2 || right.points.size() < 2) return false;
+  // A bound that is one point (a U-turn's inner bound about the road's line) gives align nothing
+  // to go by: such a lanelet is orientationProblem's to judge.
+  const auto isPoint = [](const std::vector<Eigen::Vector3d>& p) {
+    return std::all_of(p.begin(), p.end(), [&](const Eigen::Vector3d& q) { return (q - p.front()).head<2>().norm() < 0.05; });
+  };
+  if (isPoint(left.points) || isPoint(right.points)) return false;
+  const Alignment a = lanelet2Alignment(left.points, right.points);
+  return a.invert_left || a.invert_right;
+}
+
 std::vector<std::string> orientationProblems(const LaneMap& map) {
   std::vector<std::string> problems;
   for (const auto& ll : map.lanelets) {

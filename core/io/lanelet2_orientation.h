@@ -20,6 +20,13 @@ namespace lanemap::io {
 // meant. Long U-shaped lanelets and sharp connections between overlapping lane ends can fail.
 std::string orientationProblem(const map::Lanelet& lanelet, const map::LineString& left,
                                const map::LineString& right);
+// True when Lanelet2's loader would turn either bound as stored (both stored in the driving
+// direction, as a lanelet's own bounds are; a line shared with an opposite lane is not). For such
+// bounds orientationProblem can miss the misreading when a bound is short and its ends lie
+// backwards (a connection around a tight corner whose inner lane ends overlap): turned, it still
+// looks aligned by its ends. False when a bound is a single point (within 5 cm: a U-turn's inner
+// bound), which gives align nothing to go by.
+bool boundTurnedOnLoad(const map::LineString& left, const map::LineString& right);
 // orientationProblem for every lanelet of the map. Empty when the map is consistent.
 std::vector<std::string> orientationProblems(const map::LaneMap& map);
 

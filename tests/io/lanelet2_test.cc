@@ -358,6 +358,34 @@ TEST(Lanelet2, OrientationFollowsLanelet2Align) {
   EXPECT_EQ(orientationProblem(straight, l, r), "");
 }
 
+// A right turn around a tight corner whose inner lane ends overlap (the broad benchmark's Fremantle
+// loop, 2026-12-07: the shapes below, in metres): the inner (right) bound's end lies behind its
+// start along the turn. Stored in the driving direction, Lanelet2's align turns it (the left bound's
+// middle point lies on its right), yet by its ends the turned bound still looks aligned, so
+// orientationProblem finds nothing; boundTurnedOnLoad does. Not for a connection's sound bounds,
+// nor a left bound stored in the driving direction; a line stored against it (shared with an opposite
+// lane) is turned on load, as meant there.
+TEST(Lanelet2, ABoundTurnedOnLoadAtATightCornerIsFound) {
+  map::Lanelet ll;
+  ll.id = 1;
+  ll.left_id = 2;
+  ll.right_id = 3;
+  ll.centre = {{165.8, 89.6, 0}, {166.3, 90.3, 0}, {167.0, 90.7, 0}, {167.7, 91.0, 0}};
+  map::LineString left{2, LineType::kVirtual,
+                       {{164.6, 90.7, 0}, {165.1, 91.4, 0}, {166.0, 92.0, 0}, {167.0, 92.4, 0}, {168.8, 92.2, 0}}};
+  map::LineString right{3, LineType::kVirtual, {{167.1, 88.4, 0}, {166.8, 88.8, 0}, {166.6, 89.1, 0}, {166.4, 89.7, 0}}};
+  EXPECT_EQ(orientationProblem(ll, left, right), "") << "orientationProblem alone misses it";
+  EXPECT_TRUE(boundTurnedOnLoad(left, right));
+  // The same turn with its inner lane ends apart: the inner bound runs on around the corner.
+  right.points = {{167.1, 88.4, 0}, {167.6, 89.2, 0}, {168.2, 89.6, 0}, {169.0, 89.8, 0}};
+  left.points.back() = {169.4, 92.0, 0};
+  ll.centre.back() = {169.2, 90.9, 0};
+  EXPECT_FALSE(boundTurnedOnLoad(left, right));
+  EXPECT_EQ(orientationProblem(ll, left, right), "");
+  std::reverse(left.points.begin(), left.points.end());
+  EXPECT_TRUE(boundTurnedOnLoad(left, right)) << "a line stored against the driving direction is turned";
+}
+
 // A JOSM-style file: negative ids, no ele, the right bound drawn against the driving direction,
 // a successor found by node id, and one by position only (separate nodes 4 mm apart).
 TEST(Lanelet2, ReadsForeignMapWithNegativeIdsAndReversedBounds) {

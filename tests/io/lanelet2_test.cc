@@ -362,9 +362,10 @@ TEST(Lanelet2, OrientationFollowsLanelet2Align) {
 // loop, 2026-12-07: the shapes below, in metres): the inner (right) bound's end lies behind its
 // start along the turn. Stored in the driving direction, Lanelet2's align turns it (the left bound's
 // middle point lies on its right), yet by its ends the turned bound still looks aligned, so
-// orientationProblem finds nothing; boundTurnedOnLoad does. Not for a connection's sound bounds,
-// nor a left bound stored in the driving direction; a line stored against it (shared with an opposite
-// lane) is turned on load, as meant there.
+// orientationProblem finds nothing; boundTurnedOnLoad does. The same turn with its inner lane ends
+// apart is read as stored; a line stored against the driving direction (one shared with an opposite
+// lane) is turned on load, as meant there, and boundTurnedOnLoad says so (it is for a lanelet's own
+// bounds, stored in its driving direction).
 TEST(Lanelet2, ABoundTurnedOnLoadAtATightCornerIsFound) {
   map::Lanelet ll;
   ll.id = 1;

@@ -659,6 +659,23 @@ TEST(Explorer, RoadFirstSeenFarInStartsItsLanesThere) {
   }
 }
 
+// Every lane found runs over the road's whole stretch (within 0.5 m of s_begin and s_end), is a
+// truth lane by its index from the left and lies within 0.3 m of it everywhere, and every truth
+// lane is among them.
+void expectEveryTruthLaneOverTheStretch(const ExplorationResult& res, const Scenario& sc, const RoadGeometry& road) {
+  std::set<int> found;
+  for (const Lane& l : res.lanes) {
+    EXPECT_NEAR(l.s_begin, road.s_begin, 0.5) << "lane " << l.id;
+    EXPECT_NEAR(l.s_end, road.s_end, 0.5) << "lane " << l.id;
+    ASSERT_GE(l.index_from_left, 0);
+    ASSERT_LT(l.index_from_left, static_cast<int>(sc.truth.size()));
+    found.insert(l.index_from_left);
+    const double truth_d = sc.truth[l.index_from_left].d(0);
+    for (const auto& p : l.waypoints) EXPECT_NEAR(sc.layout.ref.toSD(p).y(), truth_d, 0.3) << "lane " << l.id;
+  }
+  EXPECT_EQ(found.size(), sc.truth.size());
+}
+
 // Issue 16, roads between close junctions (the benchmark's Kingsway and Fremantle cases): a road
 // 33 m long whose ROIs leave s 15-29.8 of it, seen mostly from the junction before it. The lane
 // classes are the ego lane's cross-section's only, so what the camera saw of the road from the
@@ -687,17 +704,7 @@ void shortRoadSeenFromTheJunction(const std::vector<double>& widths) {
   road.s_end = s_end;
   const ExplorationResult res = exploreRoad(grid, road, {});
   EXPECT_EQ(res.lanes.size(), widths.size());
-  std::set<int> found;
-  for (const Lane& l : res.lanes) {
-    EXPECT_NEAR(l.s_begin, s_begin, 0.5) << "lane " << l.id;
-    EXPECT_NEAR(l.s_end, s_end, 0.5) << "lane " << l.id;
-    ASSERT_GE(l.index_from_left, 0);
-    ASSERT_LT(l.index_from_left, static_cast<int>(sc.truth.size()));
-    found.insert(l.index_from_left);
-    const double truth_d = sc.truth[l.index_from_left].d(0);
-    for (const auto& p : l.waypoints) EXPECT_NEAR(sc.layout.ref.toSD(p).y(), truth_d, 0.3) << "lane " << l.id;
-  }
-  EXPECT_EQ(found.size(), widths.size());
+  expectEveryTruthLaneOverTheStretch(res, sc, road);
 }
 
 TEST(Explorer, ShortRoadSeenFromTheJunctionTwoLanes) { shortRoadSeenFromTheJunction({3.5, 3.4}); }
@@ -726,17 +733,7 @@ TEST(Explorer, ALaneSeenOnlyFromTheJunctionBeyondADashedLine) {
   const bev::BevGrid grid = paint(sc.layout);
   const ExplorationResult res = exploreRoad(grid, road, {});
   ASSERT_EQ(res.lanes.size(), widths.size());
-  std::set<int> found;
-  for (const Lane& l : res.lanes) {
-    EXPECT_NEAR(l.s_begin, road.s_begin, 0.5) << "lane " << l.id;
-    EXPECT_NEAR(l.s_end, road.s_end, 0.5) << "lane " << l.id;
-    ASSERT_GE(l.index_from_left, 0);
-    ASSERT_LT(l.index_from_left, static_cast<int>(sc.truth.size()));
-    found.insert(l.index_from_left);
-    const double truth_d = sc.truth[l.index_from_left].d(0);
-    for (const auto& p : l.waypoints) EXPECT_NEAR(sc.layout.ref.toSD(p).y(), truth_d, 0.3) << "lane " << l.id;
-  }
-  EXPECT_EQ(found.size(), widths.size());
+  expectEveryTruthLaneOverTheStretch(res, sc, road);
   ExplorerOptions off;
   off.blocked_lane_beyond_dashed_edge = false;
   EXPECT_EQ(exploreRoad(grid, road, off).lanes.size(), 2u) << "without the rule the walk ends at the dashed line";

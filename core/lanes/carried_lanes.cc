@@ -56,4 +56,81 @@ ExplorationResult carryLanesThrough(const RoadGeometry& road_in, std::vector<Car
   return res;
 }
 
+int dropLanesApartFromCarried(const RoadGeometry& road, const std::vector<CarriedLane>& carried,
+                              const ExplorerOptions& o, ExplorationResult* explored) {
+  auto& lanes = explored->lanes;
+  if (!o.drop_lanes_apart_from_carried || carried.empty() || !(road.s_end - road.s_begin < o.carry_lanes_max_m)) return 0;
+  for (const auto& c : carried) {
+    if (!c.seen) return 0;
+  }
+  // The carried lanes side by side nearest the road's line (the road before's own carriageway: a
+  // lane more than a lane's width from the rest was itself explored across an island).
+  std::vector<double> cd;
+  for (const auto& c : carried) cd.push_back(c.d);
+  std::sort(cd.begin(), cd.end());
+  std::vector<double> group, best_group;
+  double best_gap = INFINITY;
+  for (size_t k = 0; k <= cd.size(); ++k) {
+    if (k == cd.size() || (!group.empty() && cd[k] - group.back() > o.lane_width_max_m)) {
+      const double gap = group.front() > 0.0 ? group.front() : group.back() < 0.0 ? -group.back() : 0.0;  // from d = 0
+      if (gap < best_gap) {
+        best_gap = gap;
+        best_group = group;
+      }
+      group.clear();
+    }
+    if (k < cd.size()) group.push_back(cd[k]);
+  }
+  if (lanes.size() <= best_group.size()) return 0;
+  // Each explored lane's offset: its centre's mean over its stretch.
+  std::vector<double> d(lanes.size());
+  for (size_t k = 0; k < lanes.size(); ++k) {
+    const Lane& l = lanes[k];
+    constexpr int kSamples = 9;
+    double sum = 0.0;
+    for (int i = 0; i < kSamples; ++i) sum += l.centre.d(l.s_begin + (l.s_end - l.s_begin) * i / (kSamples - 1));
+    d[k] = sum / kSamples;
+  }
+  const auto matched = [&](double shift, std::vector<bool>* m) {
+    int n = 0;
+    for (size_t k = 0; k < lanes.size(); ++k) {
+      bool hit = false;
+      for (const double c : best_group) hit = hit || std::abs(d[k] - (c + shift)) < o.same_lane_m;
+      if (m) (*m)[k] = hit;
+      n += hit;
+    }
+    return n;
+  };
+  // The common shift matching the most lanes (of equals the smallest), in 5 cm steps.
+  const int steps = static_cast<int>(std::floor(0.5 * o.lane_width_max_m / 0.05));
+  int best_n = 0;
+  double best_shift = 0.0;
+  for (int i = 0; i <= steps; ++i) {
+    for (const double shift : {0.05 * i, -0.05 * i}) {
+      const int n = matched(shift, nullptr);
+      if (n > best_n) {
+        best_n = n;
+        best_shift = shift;
+      }
+    }
+  }
+  if (best_n == 0) return 0;
+  std::vector<bool> kept(lanes.size(), false);
+  matched(best_shift, &kept);
+  for (bool grew = true; grew;) {  // outwards from the matched lanes, a lane's width at a time
+    grew = false;
+    for (size_t k = 0; k < lanes.size(); ++k) {
+      if (kept[k]) continue;
+      for (size_t j = 0; j < lanes.size() && !kept[k]; ++j) {
+        if (kept[j] && std::abs(d[k] - d[j]) <= o.lane_width_max_m) kept[k] = grew = true;
+      }
+    }
+  }
+  std::vector<bool> drop(lanes.size());
+  int dropped = 0;
+  for (size_t k = 0; k < lanes.size(); ++k) dropped += drop[k] = !kept[k];
+  if (dropped > 0) removeLanes(drop, &lanes);
+  return dropped;
+}
+
 }  // namespace lanemap::lanes

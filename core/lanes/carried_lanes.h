@@ -29,6 +29,7 @@ struct CarriedLane {
   double half_right_m = 1.75;      // its right bound's offset from the centre
   map::LineType left_type = map::LineType::kVirtual;
   map::LineType right_type = map::LineType::kVirtual;
+  bool seen = true;                // false: made from the road's own OSM way (nothing seen of it)
 };
 
 // Whether `explored` (exploreRoad on `road`) gives way to `carried` lanes, as described above.
@@ -39,5 +40,22 @@ bool takesCarriedLanes(const RoadGeometry& road, const ExplorationResult& explor
 // dropped). Throws LanesError for a road without a polyline or with nothing carried.
 ExplorationResult carryLanesThrough(const RoadGeometry& road, std::vector<CarriedLane> carried,
                                     const ExplorerOptions& options);
+
+// A short road's explored lanes apart from those that run on into it. On a link between close
+// junctions the explored stretch is a few metres, too short for the carriageway walk (buildRaster)
+// to see the kerb of an island along most of a bin: the other carriageway of a divided road across
+// the island (a "sausage link") is then explored as lanes of ours. So, where exploring a road
+// shorter than carry_lanes_max_m found more lanes than `carried` (the road before's lanes, seen:
+// not its OSM way's; of those, the ones side by side nearest the road's line, as a lane more than
+// lane_width_max_m from the rest was itself explored across an island), the explored lanes are
+// matched to the carried ones under one common shift
+// of at most lane_width_max_m / 2 (on a one-way road the OSM line is the carriageway's middle,
+// which moves by half a lane where the lane count changes), the shift matching the most lanes
+// within same_lane_m (of equals the smallest); from the matched lanes outwards a lane whose centre
+// lies within lane_width_max_m of a kept one is kept (a lane added beside them: a pocket, a
+// flare); the rest lie over a lane's width beyond every kept lane and are dropped. Nothing matched,
+// or options.drop_lanes_apart_from_carried off: nothing dropped. Returns how many were dropped.
+int dropLanesApartFromCarried(const RoadGeometry& road, const std::vector<CarriedLane>& carried,
+                              const ExplorerOptions& options, ExplorationResult* explored);
 
 }  // namespace lanemap::lanes

@@ -1642,6 +1642,11 @@ void indexLanesFromLeft(std::vector<Lane>* lanes) {
 
 }  // namespace
 
+void removeLanes(const std::vector<bool>& drop, std::vector<Lane>* lanes) {
+  dropLanes(drop, lanes);
+  indexLanesFromLeft(lanes);
+}
+
 ExplorationResult startExploration(const RoadGeometry& road_in, const ExplorerOptions& o, RoadGeometry* stretch) {
   o.validate();
   if (road_in.polyline.size() < 2) throw LanesError("road " + std::to_string(road_in.road_id) + " has no polyline");

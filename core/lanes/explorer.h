@@ -165,6 +165,11 @@ ExplorationResult startExploration(const RoadGeometry& road, const ExplorerOptio
 ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road, const ExplorerOptions& options,
                               const std::optional<EgoPose>& ego = std::nullopt, int history_stride = 0);
 
+// Removes the lanes whose drop[id] is set (ids are indices into *lanes), renumbers the rest, their
+// split and merge links with them (a link to a removed lane is none), and indexes them from the
+// left again.
+void removeLanes(const std::vector<bool>& drop, std::vector<Lane>* lanes);
+
 // Two lanes of one road that run side by side over [s_begin, s_end] with the right bound of lane
 // `left` on the left bound of lane `right` (their probes found the same line).
 struct LaneNeighbours {

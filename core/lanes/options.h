@@ -99,6 +99,9 @@ struct ExplorerOptions {
   double carry_max_turn_rad = 0.35;      // ... "straight": its heading turns by at most this at the junction
   bool lanes_from_osm_way = true;        // ... and when no mapped road runs straight into or out of it,
                                          //   the lanes its own OSM way gives (carried_lanes.h lanesFromOsmWay)
+  bool drop_lanes_apart_from_carried = true;  // a short road's explored lanes more than a lane's width
+                                         //   beyond those the road before runs on into are dropped
+                                         //   (carried_lanes.h dropLanesApartFromCarried)
   double split_neighbour_m = 4.5;        // a lane born/ending this close to another splits/merges
   double pocket_taper_max_m = 40.0;      // a lane split off another (a turn pocket) starts where its
                                          //   taper does, looked for this far back (0: where it was found)

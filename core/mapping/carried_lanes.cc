@@ -158,6 +158,7 @@ std::vector<lanes::CarriedLane> lanesFromOsmWay(const skeleton::AtomicRoad& road
   const double w = 2.0 * o.default_half_width_m;
   for (int k = 0; k < n; ++k) {  // left to right
     lanes::CarriedLane l;
+    l.seen = false;
     l.half_left_m = l.half_right_m = o.default_half_width_m;
     if (!two_way) {
       l.d = (0.5 * (n - 1) - k) * w;

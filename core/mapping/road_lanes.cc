@@ -65,6 +65,8 @@ RoadLanes exploreRoadLanes(const bev::BevGrid& grid, const lanes::RoadGeometry& 
   if (may_carry && (!explored || lanes::takesCarriedLanes(geometry, out.result, carried.size(), options))) {
     out.result = lanes::carryLanesThrough(geometry, carried, options);
     out.lanes_carried = true;
+  } else if (may_carry) {
+    out.lanes_apart_dropped = lanes::dropLanesApartFromCarried(geometry, carried, options, &out.result);
   }
   out.lanes = lanes::toLaneMap(out.result, origin.lat, origin.lon, origin.alt);
   setConfidence(out.lanes, out.result, laneConfidences(grid, out.result, options));  // per lane, 0..1

@@ -27,6 +27,9 @@ struct RoadLanes {
   std::vector<std::string> lanes_dropped;
   // The lanes are those of the road before, carried through this short one (carried_lanes.h).
   bool lanes_carried = false;
+  // Explored lanes dropped as lying over a lane's width beyond those the road before runs on into
+  // it (lanes::dropLanesApartFromCarried: across an island).
+  int lanes_apart_dropped = 0;
 };
 
 // Removes from `lanes` every lanelet io::orientationProblem finds, with what referred to it: its
@@ -36,7 +39,8 @@ std::vector<std::string> dropMisreadLanelets(map::LaneMap& lanes);
 
 // `carried`: the lanes of the road leading straight into this one (mapping::lanesLeadingInto);
 // a short road takes them instead of what exploring it found when lanes::takesCarriedLanes says so
-// (never a partial road). Throws what lanes::exploreRoad throws (when nothing is carried).
+// (never a partial road), else drops the explored lanes apart from them
+// (lanes::dropLanesApartFromCarried). Throws what lanes::exploreRoad throws (when nothing is carried).
 RoadLanes exploreRoadLanes(const bev::BevGrid& grid, const lanes::RoadGeometry& geometry,
                            const std::optional<map::PartialRoad>& partial, const lanes::ExplorerOptions& options,
                            const geo::LatLonAlt& origin, const std::vector<lanes::CarriedLane>& carried = {});

@@ -341,5 +341,121 @@ TEST(CarriedLanes, TheOsmWaysLanesLieNearTheTruthWhereTheCountsAgree) {
   EXPECT_GT(within_half_metre, 0.9);
 }
 
+// Lanes at these offsets over a link's explored stretch, as exploring would give them.
+lanes::ExplorationResult exploredAt(const lanes::RoadGeometry& g, const std::vector<double>& offsets) {
+  std::vector<lanes::CarriedLane> c;
+  for (double d : offsets) {
+    c.emplace_back();
+    c.back().d = d;
+  }
+  return lanes::carryLanesThrough(g, c, lanes::ExplorerOptions());
+}
+
+std::vector<double> offsetsOf(const lanes::ExplorationResult& r) {
+  std::vector<double> out;
+  for (const auto& lane : r.lanes) out.push_back(lane.centre.d(0.5 * (lane.s_begin + lane.s_end)));
+  return out;
+}
+
+// A sausage link (aurora_sausage_link on the model's labels): a 12 m link of a divided road whose
+// island the carriageway walk did not see along most of a bin; exploring found the other
+// carriageway's two lanes across it (7.6 and 11.2 m left) besides the link's own two. The road
+// before runs on with two lanes at +-1.75 m: the two across the island are dropped. A lane added
+// beside the carried ones (a flare, 3.5 m on) stays; so does everything when the carried lanes
+// are the link's own OSM way's (nothing seen), when the road is not short, when exploring found no
+// more lanes than were carried, or with the option off.
+TEST(CarriedLanes, AShortRoadsLanesAcrossAnIslandFromTheCarriedOnesAreDropped) {
+  const lanes::ExplorerOptions o;
+  const lanes::RoadGeometry g = link(30.0, 9.0);
+  lanes::ExplorationResult r = exploredAt(g, {1.9, -1.8, 7.6, 11.2});  // left to right: 11.2, 7.6, 1.9, -1.8
+  r.lanes[2].split_from = 1;  // a link to a dropped lane goes with it
+  r.lanes[3].split_from = 2;  // one to a kept lane is renumbered
+  EXPECT_EQ(lanes::dropLanesApartFromCarried(g, twoLanes(), o, &r), 2);
+  ASSERT_EQ(r.lanes.size(), 2u);
+  EXPECT_NEAR(offsetsOf(r)[0], 1.9, 1e-9);
+  EXPECT_NEAR(offsetsOf(r)[1], -1.8, 1e-9);
+  for (size_t k = 0; k < r.lanes.size(); ++k) {
+    EXPECT_EQ(r.lanes[k].id, static_cast<int>(k));
+    EXPECT_EQ(r.lanes[k].index_from_left, static_cast<int>(k));
+  }
+  EXPECT_EQ(r.lanes[0].split_from, -1);
+  EXPECT_EQ(r.lanes[1].split_from, 0);
+
+  // The road before had a lane across the island itself (5.9 m left, 7.6 m from its own): only
+  // its own carriageway's lanes count.
+  lanes::CarriedLane own, across;
+  own.d = -1.67;
+  across.d = 5.93;
+  r = exploredAt(g, {-1.76, 1.92, 8.11, 11.67});
+  EXPECT_EQ(lanes::dropLanesApartFromCarried(g, {own, across}, o, &r), 2);
+  ASSERT_EQ(r.lanes.size(), 2u);
+  EXPECT_NEAR(offsetsOf(r)[0], 1.92, 1e-9);
+
+  // One-way: one lane carried on the OSM line, two explored half a lane either side of it (the
+  // line is the carriageway's middle: it moved where the count changed), and one 6.25 m on.
+  lanes::CarriedLane one;
+  r = exploredAt(g, {1.75, -1.75, 8.0});
+  EXPECT_EQ(lanes::dropLanesApartFromCarried(g, {one}, o, &r), 1);
+  ASSERT_EQ(r.lanes.size(), 2u);
+  EXPECT_NEAR(offsetsOf(r)[0], 1.75, 1e-9);
+
+  // A lane beside the carried ones: kept, and one beside it too.
+  r = exploredAt(g, {1.75, -1.75, -5.25, -8.75});
+  EXPECT_EQ(lanes::dropLanesApartFromCarried(g, twoLanes(), o, &r), 0);
+  EXPECT_EQ(r.lanes.size(), 4u);
+
+  auto osm_way = twoLanes();
+  for (auto& c : osm_way) c.seen = false;
+  r = exploredAt(g, {1.9, -1.8, 7.6, 11.2});
+  EXPECT_EQ(lanes::dropLanesApartFromCarried(g, osm_way, o, &r), 0);
+  const lanes::RoadGeometry long_road = link(58.0, 9.0);
+  r = exploredAt(long_road, {1.9, -1.8, 7.6, 11.2});
+  EXPECT_EQ(lanes::dropLanesApartFromCarried(long_road, twoLanes(), o, &r), 0);
+  r = exploredAt(g, {1.9, 7.6});
+  EXPECT_EQ(lanes::dropLanesApartFromCarried(g, twoLanes(), o, &r), 0);
+  lanes::ExplorerOptions off = o;
+  off.drop_lanes_apart_from_carried = false;
+  r = exploredAt(g, {1.9, -1.8, 7.6, 11.2});
+  EXPECT_EQ(lanes::dropLanesApartFromCarried(g, twoLanes(), off, &r), 0);
+  EXPECT_EQ(r.lanes.size(), 4u);
+}
+
+// The same through exploreRoadLanes on painted evidence: a 12 m link whose island (2 m wide, 1.75
+// m left of the link's left lane) and its kerbs were seen over 5 m only (the walk needs a wall
+// along 80 % of a 10 m bin, a kerb along 70 %), the ground beyond it labelled drivable, the other
+// carriageway's two lanes beyond. Explored alone: its own
+// two lanes and more; with the road before's two lanes carried: its own two.
+TEST(CarriedLanes, ALinkBesideTheOtherCarriagewayKeepsItsOwnLanes) {
+  using namespace lanes::testing;
+  Layout L;
+  L.ref.length = 30.0;
+  L.lines.push_back({constant(-3.5), -1e9, 1e9, Line::kCurb, false});
+  L.lines.push_back({constant(0.0), -1e9, 1e9, Line::kDashed, true});
+  L.lines.push_back({constant(3.5), 13.0, 18.0, Line::kCurb, false});   // the island's kerbs, seen in part
+  L.lines.push_back({constant(5.5), 13.0, 18.0, Line::kCurb, false});
+  L.lines.push_back({constant(9.0), -1e9, 1e9, Line::kDashed, true});   // the other carriageway
+  L.lines.push_back({constant(12.5), -1e9, 1e9, Line::kCurb, false});
+  L.areas.push_back({constant(-3.5), constant(12.5)});
+  L.boxes.push_back({13.0, 18.0, 3.65, 5.35});  // the island: ground, not drivable, where it is seen
+  const bev::BevGrid grid = paint(L);
+  lanes::RoadGeometry g;
+  g.road_id = 5;
+  g.polyline = L.ref.polyline();
+  g.s_begin = 9.0;
+  g.s_end = 21.0;
+  const lanes::ExplorerOptions o;
+  const geo::LatLonAlt origin{49.0, 8.4, 0.0};
+  const mapping::RoadLanes alone = mapping::exploreRoadLanes(grid, g, std::nullopt, o, origin);
+  EXPECT_GE(alone.result.lanes.size(), 3u) << "the other carriageway explored as ours";
+  const mapping::RoadLanes with = mapping::exploreRoadLanes(grid, g, std::nullopt, o, origin, twoLanes());
+  EXPECT_FALSE(with.lanes_carried);
+  EXPECT_EQ(with.lanes_apart_dropped, static_cast<int>(alone.result.lanes.size()) - 2);
+  ASSERT_EQ(with.result.lanes.size(), 2u);
+  EXPECT_EQ(with.lanes.lanelets.size(), 2u);
+  for (const auto& lane : with.result.lanes) {
+    EXPECT_NEAR(lane.centre.d(15.0), lane.index_from_left == 0 ? 1.75 : -1.75, 0.3);
+  }
+}
+
 }  // namespace
 }  // namespace lanemap

@@ -1012,6 +1012,24 @@ int joinLanePieces(const Raster& R, const ExplorerOptions& o, std::vector<Track>
 // began with the start strip is carried back to the road's start when the road was seen from
 // there (`seen_from_start`, ParticleFilter::seedStartStrip). Split and merge relations through
 // dropped tracks go to those tracks' own relations.
+// Beyond its samples a fit runs on at its end segments' slopes: over the metres a track coasted
+// beside another lane in one wide cluster (no samples of its own) to the junction, or back to the
+// road's start from where a lane seen late was first sampled, that slope carries the lane off
+// across the road (i5's exit lane: 11 m off over 24 m). Nothing was seen there: the lane is held
+// at its last (first) fitted offset, parallel to the road, over [s_begin, s_end].
+void holdBeyondSamples(double s_begin, double s_end, PiecewiseLinearFit* fit) {
+  constexpr double kMinGap = 1.0;  // (a bin's half-width short of the end is no gap)
+  if (fit->knots.empty()) return;
+  if (s_end > fit->knots.back() + kMinGap) {
+    fit->knots.push_back(s_end);
+    fit->values.push_back(fit->values.back());
+  }
+  if (s_begin < fit->knots.front() - kMinGap) {
+    fit->knots.insert(fit->knots.begin(), s_begin);
+    fit->values.insert(fit->values.begin(), fit->values.front());
+  }
+}
+
 std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const RoadGeometry& road, double s_stop,
                            double min_lane_length, bool seen_from_start, const ExplorerOptions& o) {
   std::vector<Lane> lanes;
@@ -1034,7 +1052,9 @@ std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const Ro
     Lane lane;
     lane.s_begin = s_beg;
     lane.s_end = s_end;
-    lane.centre = CentreLine(fitPiecewiseLinear(bs, o.break_spacing_m, o.break_penalty_m2), s_beg, s_end);
+    PiecewiseLinearFit fit = fitPiecewiseLinear(bs, o.break_spacing_m, o.break_penalty_m2);
+    if (o.flat_beyond_samples) holdBeyondSamples(s_beg, s_end, &fit);
+    lane.centre = CentreLine(fit, s_beg, s_end);
     for (double w : bs.weight) lane.particle_samples += static_cast<int64_t>(w);
     lane.split_from = tr.parent;    // track ids for now
     lane.merges_into = tr.merge_into;

@@ -40,7 +40,9 @@
 //    dropped, and so is any lane holding under weak_density_fraction of the particles per metre
 //    of a lane over half its stretch (a few particles that found room beyond a kerb).
 // 4. Each lane's particle history is regressed (Eq. 6: piecewise linear with optimised break
-//    points, then a natural cubic spline) as d(s); way-points every waypoint_spacing_m. A lane
+//    points, then a natural cubic spline) as d(s); before its first and after its last sample
+//    (a lane seen late, a track coasting beside another to the junction) it is held at its end
+//    offsets, parallel to the road (flat_beyond_samples); way-points every waypoint_spacing_m. A lane
 //    whose centre line crosses observed drivable ground at under min_drivable_share of its length
 //    lies on nothing the camera saw as road (particles living on in unobserved ground) and is
 //    dropped (dropLanesOnNothing).

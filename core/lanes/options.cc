@@ -60,6 +60,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("dbscan_min_points", o.dbscan_min_points);
   r.read("track_tolerance_m", o.track_tolerance_m);
   r.read("lane_gap_max_m", o.lane_gap_max_m);
+  r.read("flat_beyond_samples", o.flat_beyond_samples);
   r.read("same_lane_m", o.same_lane_m);
   r.read("min_lane_length_m", o.min_lane_length_m);
   r.read("short_road_min_m", o.short_road_min_m);

@@ -81,6 +81,8 @@ struct ExplorerOptions {
   int dbscan_min_points = 4;
   double track_tolerance_m = 0.6;        // a cluster continues a lane whose d is within its range +- this
   double lane_gap_max_m = 20.0;          // a lane with no particles longer than this has ended
+  bool flat_beyond_samples = true;       // before its first and after its last particle sample a lane
+                                         //   runs parallel to the road (false: on at its fitted slope)
   double same_lane_m = 1.2;              // two lanes closer than this are one
   double min_lane_length_m = 10.0;       // shorter lanes are dropped (on a road shorter than this
                                          //   between its ROIs: shorter than 0.8 of that stretch)

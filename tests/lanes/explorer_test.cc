@@ -643,6 +643,39 @@ TEST(Explorer, RoadFirstSeenTwentyMetresIn) {
   for (const Lane& l : rep.result.lanes) EXPECT_NEAR(l.s_begin, 3.0, 0.5) << "lane " << l.id;
 }
 
+// The same road, its lanes shifting 2 m right over the 20 m after where it was first seen (a bend
+// of the carriageway against the OSM line). Before its first particle sample a lane is held at
+// its first fitted offset, parallel to the road: at the fitted slope it would run 2 m off to the
+// left back at the road's start (i5's exit lane ran 11 m off the same way at a road's end, where
+// its track coasted beside its neighbour in one wide cluster with no samples of its own).
+TEST(Explorer, ALaneIsHeldParallelToTheRoadBeyondItsParticleSamples) {
+  Scenario sc = straightLanes({3.5, 3.4}, 150.0);
+  const Fn shift = ramp(23.0, 43.0, 0.0, -2.0);
+  const auto shifted = [&](Fn f) { return Fn([f, shift](double s) { return f(s) + shift(s); }); };
+  for (auto& ln : sc.layout.lines) ln.d = shifted(ln.d);
+  for (auto& a : sc.layout.areas) {
+    a.dlo = shifted(a.dlo);
+    a.dhi = shifted(a.dhi);
+  }
+  for (auto& t : sc.truth) t.d = shifted(t.d);
+  sc.layout.observed_s0 = 23.0;
+  const Report rep = run(sc);
+  expectLanes(rep, sc, 0.2);
+  for (const Lane& l : rep.result.lanes) {
+    EXPECT_NEAR(l.s_begin, 3.0, 0.5) << "lane " << l.id;
+    ASSERT_GE(rep.match[l.id], 0);
+    EXPECT_NEAR(l.centre.d(l.s_begin), sc.truth[rep.match[l.id]].d(l.s_begin), 0.3) << "lane " << l.id;
+  }
+  ExplorerOptions sloped;
+  sloped.flat_beyond_samples = false;
+  const Report off = run(sc, 1, sloped);
+  double worst = 0.0;
+  for (const Lane& l : off.result.lanes) {
+    if (off.match[l.id] >= 0) worst = std::max(worst, std::abs(l.centre.d(l.s_begin) - sc.truth[off.match[l.id]].d(l.s_begin)));
+  }
+  EXPECT_GT(worst, 1.0) << "at its fitted slope a lane runs off before its first sample";
+}
+
 // A road first seen 120 m in: the drive began there (the car stood on the road when the recording
 // started, and the camera looks ahead). Its lanes start where it was first seen: nothing was seen
 // of the 120 m before, so nothing is made up there (before 2026-12-05 the lanes were carried back

@@ -48,10 +48,10 @@ ExplorationResult carryLanesThrough(const RoadGeometry& road, std::vector<Carrie
 // shorter than carry_lanes_max_m found more lanes than `carried` (the road before's lanes, seen:
 // not its OSM way's; of those, the ones side by side nearest the road's line, as a lane more than
 // lane_width_max_m from the rest was itself explored across an island), the explored lanes are
-// matched to the carried ones under one common shift
-// of at most lane_width_max_m / 2 (on a one-way road the OSM line is the carriageway's middle,
-// which moves by half a lane where the lane count changes), the shift matching the most lanes
-// within same_lane_m (of equals the smallest); from the matched lanes outwards a lane whose centre
+// matched to the carried ones under one common shift of at most lane_width_max_m / 2 (on a
+// one-way road the OSM line is the carriageway's middle, which moves by half a lane where the lane
+// count changes), the shift matching the most lanes within same_lane_m (of equals the smallest;
+// each lane's offset its centre's mean over its stretch); from the matched lanes outwards a lane whose centre
 // lies within lane_width_max_m of a kept one is kept (a lane added beside them: a pocket, a
 // flare); the rest lie over a lane's width beyond every kept lane and are dropped. Nothing matched,
 // or options.drop_lanes_apart_from_carried off: nothing dropped. Returns how many were dropped.

@@ -1007,11 +1007,6 @@ int joinLanePieces(const Raster& R, const ExplorerOptions& o, std::vector<Track>
   return joined;
 }
 
-// Fit (METHOD.md section 4, step 4): the tracks long enough become lanes, each regressed as d(s)
-// (Eq. 6: piecewise linear with optimised break points, then a natural cubic spline); a lane that
-// began with the start strip is carried back to the road's start when the road was seen from
-// there (`seen_from_start`, ParticleFilter::seedStartStrip). Split and merge relations through
-// dropped tracks go to those tracks' own relations.
 // Beyond its samples a fit runs on at its end segments' slopes: over the metres a track coasted
 // beside another lane in one wide cluster (no samples of its own) to the junction, or back to the
 // road's start from where a lane seen late was first sampled, that slope carries the lane off
@@ -1030,6 +1025,12 @@ void holdBeyondSamples(double s_begin, double s_end, PiecewiseLinearFit* fit) {
   }
 }
 
+// Fit (METHOD.md section 4, step 4): the tracks long enough become lanes, each regressed as d(s)
+// (Eq. 6: piecewise linear with optimised break points, then a natural cubic spline); a lane that
+// began with the start strip is carried back to the road's start when the road was seen from
+// there (`seen_from_start`, ParticleFilter::seedStartStrip). Split and merge relations through
+// dropped tracks go to those tracks' own relations. Beyond its samples a lane is held parallel to
+// the road (holdBeyondSamples, flat_beyond_samples).
 std::vector<Lane> fitLanes(const std::vector<Track>& tracks, int nbins, const RoadGeometry& road, double s_stop,
                            double min_lane_length, bool seen_from_start, const ExplorerOptions& o) {
   std::vector<Lane> lanes;

@@ -192,6 +192,16 @@ TEST(CarriedLanes, ATwelveMetreLinkSeenOnlyFromTheJunctionsTakesThem) {
   EXPECT_FALSE(mapping::exploreRoadLanes(grid, g, std::nullopt, off, origin, twoLanes()).lanes_carried);
 }
 
+// A 30 m painted layout's road as a link whose ROIs leave its 12 m between s 9 and 21.
+lanes::RoadGeometry linkAlong(const lanes::testing::Layout& L) {
+  lanes::RoadGeometry g;
+  g.road_id = 5;
+  g.polyline = L.ref.polyline();
+  g.s_begin = 9.0;
+  g.s_end = 21.0;
+  return g;
+}
+
 // Where exploring found lanes, they stay, even when the road before brings others (its lanes sit
 // elsewhere relative to the OSM line when the count changes at the junction).
 TEST(CarriedLanes, ARoadWhoseLanesWereFoundKeepsThem) {
@@ -203,11 +213,7 @@ TEST(CarriedLanes, ARoadWhoseLanesWereFoundKeepsThem) {
   L.lines.push_back({constant(-3.5), -1e9, 1e9, Line::kSolid, false});
   L.areas.push_back({constant(-3.5), constant(3.5)});
   const bev::BevGrid grid = paint(L);
-  lanes::RoadGeometry g;
-  g.road_id = 5;
-  g.polyline = L.ref.polyline();
-  g.s_begin = 9.0;
-  g.s_end = 21.0;
+  const lanes::RoadGeometry g = linkAlong(L);
   const lanes::ExplorerOptions o;
   std::vector<lanes::CarriedLane> three(3);
   three[0].d = 3.5;
@@ -423,8 +429,8 @@ TEST(CarriedLanes, AShortRoadsLanesAcrossAnIslandFromTheCarriedOnesAreDropped) {
 // The same through exploreRoadLanes on painted evidence: a 12 m link whose island (2 m wide, 1.75
 // m left of the link's left lane) and its kerbs were seen over 5 m only (the walk needs a wall
 // along 80 % of a 10 m bin, a kerb along 70 %), the ground beyond it labelled drivable, the other
-// carriageway's two lanes beyond. Explored alone: its own
-// two lanes and more; with the road before's two lanes carried: its own two.
+// carriageway's two lanes beyond. Explored alone: its own two lanes and more; with the road
+// before's two lanes carried: its own two.
 TEST(CarriedLanes, ALinkBesideTheOtherCarriagewayKeepsItsOwnLanes) {
   using namespace lanes::testing;
   Layout L;
@@ -438,11 +444,7 @@ TEST(CarriedLanes, ALinkBesideTheOtherCarriagewayKeepsItsOwnLanes) {
   L.areas.push_back({constant(-3.5), constant(12.5)});
   L.boxes.push_back({13.0, 18.0, 3.65, 5.35});  // the island: ground, not drivable, where it is seen
   const bev::BevGrid grid = paint(L);
-  lanes::RoadGeometry g;
-  g.road_id = 5;
-  g.polyline = L.ref.polyline();
-  g.s_begin = 9.0;
-  g.s_end = 21.0;
+  const lanes::RoadGeometry g = linkAlong(L);
   const lanes::ExplorerOptions o;
   const geo::LatLonAlt origin{49.0, 8.4, 0.0};
   const mapping::RoadLanes alone = mapping::exploreRoadLanes(grid, g, std::nullopt, o, origin);

@@ -60,7 +60,20 @@ struct PreparedBox {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   Eigen::Vector3d half_extent = Eigen::Vector3d::Ones();
   double cos_yaw = 1.0, sin_yaw = 0.0;
+  // Radius of a sphere about the centre holding the box (a little over |half_extent|): a ray that
+  // passes farther from the centre cannot enter the box (missesBound).
+  double bound_radius = 0.0;
   explicit PreparedBox(const Obstacle& o);
+  // True when the ray from `origin` along `unit_dir` cannot enter the box within (0, t_max]: it
+  // passes outside the bounding sphere, or the sphere lies wholly behind the origin or beyond
+  // t_max. Conservative (never true for a ray intersectBox would find), and a few multiplies
+  // against intersectBox's rotation and three divisions.
+  bool missesBound(const Eigen::Vector3d& origin, const Eigen::Vector3d& unit_dir, double t_max) const {
+    const Eigen::Vector3d rel = centre - origin;
+    const double along = rel.dot(unit_dir);
+    if (along < -bound_radius || along - bound_radius > t_max) return true;
+    return rel.squaredNorm() - along * along > bound_radius * bound_radius;
+  }
 };
 
 // The obstacles around one viewpoint, binned by the azimuth range they cover as seen from it, for

@@ -714,9 +714,10 @@ class OfflineMapper {
       // (A shard carries nothing: the roads meeting this one may be another shard's.)
       const auto carried = shard_n_ > 0 ? std::vector<lanes::CarriedLane>{}
                                         : mapping::lanesRunningThrough(sk_, *r, assembler_.roads(), explorer_, &before);
-      auto [res, lanes_of_road, dropped, carried_in, apart] =
+      auto [res, lanes_of_road, dropped, carried_in, apart, carried_added] =
           mapping::exploreRoadLanes(grid, geometry, partial, explorer_, sk_.frame().origin(), carried);
       if (apart > 0) entry["lanes_apart_from_carried"] = apart;
+      if (carried_added > 0) entry["lanes_added_from_carried"] = carried_added;
       // Lanes from the road's own OSM way stand in until a road meeting it gets lanes to carry.
       const bool from_osm_way = carried_in && before == road_id;
       if (carried_in) entry[from_osm_way ? "lanes_from_osm_way" : "lanes_carried_from"] = from_osm_way ? nlohmann::json(true) : nlohmann::json(before);

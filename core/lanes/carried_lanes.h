@@ -58,4 +58,22 @@ ExplorationResult carryLanesThrough(const RoadGeometry& road, std::vector<Carrie
 int dropLanesApartFromCarried(const RoadGeometry& road, const std::vector<CarriedLane>& carried,
                               const ExplorerOptions& options, ExplorationResult* explored);
 
+// A short road's lanes that exploring missed but the road before runs on with. Over a link's few
+// explored metres, seen mostly from inside the junctions, a lane whose ground the segmentation
+// labelled background there (the ego lane's cross-section only is named) is not explored. So,
+// where exploring a road shorter than carry_lanes_max_m found fewer lanes than `carried` (the same
+// carried lanes as above: seen ones, the group side by side nearest the road's line) and every
+// explored lane lies within same_lane_m / 2 of a carried one under one common shift of at most as
+// much (where they fit only with a one-way road's line moved by half a lane, the lane count
+// changed at the junction: nothing is added), each carried lane with no explored lane within
+// lane_width_min_m of its shifted offset is added, over the explored lanes' stretch, as wide as it
+// was carried and with its line types, against the lane inside it (its near bound that lane's
+// bound, so the two share a border; outwards from the explored lanes; one between two explored
+// lanes at its shifted offset); no particle supports it, which its confidence says. Except beyond a kerb: where the outermost explored lane's outer bound is a kerb, the
+// carriageway ends there. The carried lanes are the road before's through lanes
+// (core/mapping/carried_lanes.h): a turn pocket ending at the junction is not among them.
+// options.add_carried_lanes_not_found off: nothing added. Returns how many were added.
+int addCarriedLanesNotFound(const RoadGeometry& road, const std::vector<CarriedLane>& carried,
+                            const ExplorerOptions& options, ExplorationResult* explored);
+
 }  // namespace lanemap::lanes

@@ -69,6 +69,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("carry_max_turn_rad", o.carry_max_turn_rad);
   r.read("lanes_from_osm_way", o.lanes_from_osm_way);
   r.read("drop_lanes_apart_from_carried", o.drop_lanes_apart_from_carried);
+  r.read("add_carried_lanes_not_found", o.add_carried_lanes_not_found);
   r.read("split_neighbour_m", o.split_neighbour_m);
   r.read("pocket_taper_max_m", o.pocket_taper_max_m);
   r.read("pocket_min_width_m", o.pocket_min_width_m);

@@ -104,6 +104,8 @@ struct ExplorerOptions {
   bool drop_lanes_apart_from_carried = true;  // a short road's explored lanes more than a lane's width
                                          //   beyond those the road before runs on into are dropped
                                          //   (carried_lanes.h dropLanesApartFromCarried)
+  bool add_carried_lanes_not_found = true;  // ... and where it found fewer, each of those lanes it
+                                         //   missed is added (carried_lanes.h addCarriedLanesNotFound)
   double split_neighbour_m = 4.5;        // a lane born/ending this close to another splits/merges
   double pocket_taper_max_m = 40.0;      // a lane split off another (a turn pocket) starts where its
                                          //   taper does, looked for this far back (0: where it was found)

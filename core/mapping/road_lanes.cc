@@ -67,6 +67,7 @@ RoadLanes exploreRoadLanes(const bev::BevGrid& grid, const lanes::RoadGeometry& 
     out.lanes_carried = true;
   } else if (may_carry) {
     out.lanes_apart_dropped = lanes::dropLanesApartFromCarried(geometry, carried, options, &out.result);
+    out.lanes_carried_added = lanes::addCarriedLanesNotFound(geometry, carried, options, &out.result);
   }
   out.lanes = lanes::toLaneMap(out.result, origin.lat, origin.lon, origin.alt);
   setConfidence(out.lanes, out.result, laneConfidences(grid, out.result, options));  // per lane, 0..1

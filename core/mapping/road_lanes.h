@@ -30,6 +30,8 @@ struct RoadLanes {
   // Explored lanes dropped as lying over a lane's width beyond those the road before runs on into
   // it (lanes::dropLanesApartFromCarried: across an island).
   int lanes_apart_dropped = 0;
+  // Lanes the road before runs on into it that exploring missed, added (lanes::addCarriedLanesNotFound).
+  int lanes_carried_added = 0;
 };
 
 // Removes from `lanes` every lanelet io::orientationProblem finds, with what referred to it: its

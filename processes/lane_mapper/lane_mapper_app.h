@@ -251,11 +251,12 @@ class LaneMapperApp {
       std::lock_guard<std::mutex> lock(roads_mutex_);
       carried = mapping::lanesRunningThrough(*sk_, *road, assembler_->roads(), options_, &carried_from);
     }
-    auto [res, m, dropped, carried_in, apart] =
+    auto [res, m, dropped, carried_in, apart, carried_added] =
         mapping::exploreRoadLanes(grid, geometry, driven_to, options_, sk_->frame().origin(), carried);
     const bool from_osm_way = carried_in && carried_from == road->id;
     if (carried_in) process_.counters().add(from_osm_way ? "roads_lanes_from_osm_way" : "roads_lanes_carried");
     process_.counters().add("lanes_apart_from_carried", apart);
+    process_.counters().add("lanes_added_from_carried", carried_added);
     for (const auto& why : dropped) std::cerr << "lane_mapper: road " << job.road_id << ": lanelet left out, " << why << "\n";
     process_.counters().add("lanelets_dropped", static_cast<int64_t>(dropped.size()));
     if (partial) process_.counters().add("roads_partial");

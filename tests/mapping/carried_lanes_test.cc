@@ -459,5 +459,125 @@ TEST(CarriedLanes, ALinkBesideTheOtherCarriagewayKeepsItsOwnLanes) {
   }
 }
 
+
+// A link whose second lane exploring missed (seattle_slip_lane, fremantle_placement on the model's
+// labels: over a link's few metres, seen from inside the junctions, the segmentation names the ego
+// lane's cross-section only, and a lane's ground can be all background). The road before runs on
+// with two lanes at +-1.75 m; exploring found the left one: the right one is added as wide as it
+// was carried (3.35 m) against the explored lane's right bound, with its line types, over the
+// explored lane's stretch, with no particle behind it.
+// Nothing is added when the explored lanes fit the carried ones only with the line moved by half a
+// lane (the count changed at the junction) or only loosely, when an explored lane matches none,
+// beyond a kerb of the explored lanes, for lanes from the link's own OSM way (nothing seen), on a
+// road that is not short, or with the option off.
+TEST(CarriedLanes, AShortRoadsLanesExploringMissedAreAddedFromTheCarriedOnes) {
+  const lanes::ExplorerOptions o;
+  const lanes::RoadGeometry g = link(30.0, 9.0);
+  lanes::ExplorationResult r = exploredAt(g, {1.8});
+  r.lanes[0].particle_samples = 500;
+  EXPECT_EQ(lanes::addCarriedLanesNotFound(g, twoLanes(), o, &r), 1);
+  ASSERT_EQ(r.lanes.size(), 2u);
+  EXPECT_NEAR(offsetsOf(r)[0], 1.8, 1e-9);
+  EXPECT_NEAR(offsetsOf(r)[1], 0.05 - 3.35 / 2, 1e-9);  // the explored lane's right bound is at 0.05
+  for (size_t k = 0; k < r.lanes.size(); ++k) {
+    EXPECT_EQ(r.lanes[k].id, static_cast<int>(k));
+    EXPECT_EQ(r.lanes[k].index_from_left, static_cast<int>(k));
+    EXPECT_DOUBLE_EQ(r.lanes[k].s_begin, r.lanes[0].s_begin);
+    EXPECT_DOUBLE_EQ(r.lanes[k].s_end, r.lanes[0].s_end);
+  }
+  const lanes::Lane& added = r.lanes[1];
+  EXPECT_EQ(added.particle_samples, 0);
+  EXPECT_EQ(r.lanes[0].particle_samples, 500);
+  ASSERT_FALSE(added.left.d.empty());
+  for (size_t i = 0; i < added.left.d.size(); ++i) {
+    EXPECT_NEAR(added.left.d[i], 0.05, 1e-9);  // on the explored lane's bound
+    EXPECT_NEAR(added.right.d[i], 0.05 - 3.35, 1e-9);
+  }
+  const auto shared = lanes::laneNeighbours(r);
+  ASSERT_EQ(shared.size(), 1u);  // one border line string between them
+  EXPECT_EQ(shared[0].left, 0);
+  EXPECT_EQ(shared[0].right, 1);
+  EXPECT_EQ(added.left.type, map::LineType::kDashed);
+  EXPECT_EQ(added.right.type, map::LineType::kSolid);
+
+  // One-way, three lanes carried about the line; exploring found the left two, 0.1 m off: the
+  // right one is added against the middle one (its right bound at -1.65).
+  std::vector<lanes::CarriedLane> three(3);
+  three[0].d = 3.5;
+  three[1].d = 0.0;
+  three[2].d = -3.5;
+  r = exploredAt(g, {3.4, 0.1});
+  EXPECT_EQ(lanes::addCarriedLanesNotFound(g, three, o, &r), 1);
+  ASSERT_EQ(r.lanes.size(), 3u);
+  EXPECT_NEAR(offsetsOf(r)[2], -3.4, 1e-9);
+
+  // Two lanes half a lane either side of the line: they fit the three only with the line moved,
+  // the link has two lanes.
+  r = exploredAt(g, {1.75, -1.75});
+  EXPECT_EQ(lanes::addCarriedLanesNotFound(g, three, o, &r), 0);
+  EXPECT_EQ(r.lanes.size(), 2u);
+  // Matched only loosely (0.9 m off under any shift of up to 0.6 m): not where the carried lanes are.
+  r = exploredAt(g, {-1.71, 1.71});
+  std::vector<lanes::CarriedLane> three_off = three;
+  for (auto& c : three_off) c.d += 0.3;  // -3.2, 0.3, 3.8 (aurora_sausage_link road 8)
+  EXPECT_EQ(lanes::addCarriedLanesNotFound(g, three_off, o, &r), 0);
+  // A lane matching no carried one.
+  r = exploredAt(g, {0.1, -8.0});
+  EXPECT_EQ(lanes::addCarriedLanesNotFound(g, three, o, &r), 0);
+  // A kerb beside the explored lane on the side the missing one would be: the carriageway ends.
+  r = exploredAt(g, {1.8});
+  r.lanes[0].right.type = map::LineType::kCurb;
+  EXPECT_EQ(lanes::addCarriedLanesNotFound(g, twoLanes(), o, &r), 0);
+  r.lanes[0].right.type = map::LineType::kDashed;
+  r.lanes[0].left.type = map::LineType::kCurb;  // the other side: no matter
+  EXPECT_EQ(lanes::addCarriedLanesNotFound(g, twoLanes(), o, &r), 1);
+  auto osm_way = twoLanes();
+  for (auto& c : osm_way) c.seen = false;
+  r = exploredAt(g, {1.8});
+  EXPECT_EQ(lanes::addCarriedLanesNotFound(g, osm_way, o, &r), 0);
+  const lanes::RoadGeometry long_road = link(58.0, 9.0);
+  r = exploredAt(long_road, {1.8});
+  EXPECT_EQ(lanes::addCarriedLanesNotFound(long_road, twoLanes(), o, &r), 0);
+  lanes::ExplorerOptions off = o;
+  off.add_carried_lanes_not_found = false;
+  r = exploredAt(g, {1.8});
+  EXPECT_EQ(lanes::addCarriedLanesNotFound(g, twoLanes(), off, &r), 0);
+  EXPECT_EQ(r.lanes.size(), 1u);
+}
+
+// The same through exploreRoadLanes on painted evidence: a 12 m two-lane link whose right lane was
+// seen but neither its ground labelled drivable nor the dashed line between the lanes caught (a
+// blocked strip between painted lines would be a lane the segmentation does not name). Explored
+// alone: one lane; with the road before's two lanes carried: both, the right one where it was
+// carried.
+TEST(CarriedLanes, ALinkGetsTheLaneItsEvidenceMissedFromTheRoadBefore) {
+  using namespace lanes::testing;
+  Layout L;
+  L.ref.length = 30.0;
+  L.lines.push_back({constant(3.5), -1e9, 1e9, Line::kCurb, false});
+  L.lines.push_back({constant(-3.5), -1e9, 1e9, Line::kCurb, false});
+  L.areas.push_back({constant(0.0), constant(3.5)});  // the right lane's ground: seen, not drivable
+  const bev::BevGrid grid = paint(L);
+  const lanes::RoadGeometry g = linkAlong(L);
+  const lanes::ExplorerOptions o;
+  const geo::LatLonAlt origin{49.0, 8.4, 0.0};
+  const mapping::RoadLanes alone = mapping::exploreRoadLanes(grid, g, std::nullopt, o, origin);
+  ASSERT_EQ(alone.result.lanes.size(), 1u) << "the right lane's ground is not drivable";
+  const mapping::RoadLanes with = mapping::exploreRoadLanes(grid, g, std::nullopt, o, origin, twoLanes());
+  EXPECT_FALSE(with.lanes_carried);
+  EXPECT_EQ(with.lanes_carried_added, 1);
+  ASSERT_EQ(with.result.lanes.size(), 2u);
+  ASSERT_EQ(with.lanes.lanelets.size(), 2u);
+  const auto& a = with.lanes.lanelets[0];
+  const auto& b = with.lanes.lanelets[1];
+  EXPECT_TRUE(a.right_id == b.left_id || b.right_id == a.left_id) << "the two share one border line string";
+  for (const auto& lane : with.result.lanes) {
+    EXPECT_NEAR(lane.centre.d(15.0), lane.index_from_left == 0 ? 1.75 : -1.75, 0.3);
+  }
+  lanes::ExplorerOptions off = o;
+  off.add_carried_lanes_not_found = false;
+  EXPECT_EQ(mapping::exploreRoadLanes(grid, g, std::nullopt, off, origin, twoLanes()).result.lanes.size(), 1u);
+}
+
 }  // namespace
 }  // namespace lanemap

@@ -34,6 +34,20 @@ bool onTopAgainst(const Points& a, const Points& b, const SharedDividerOptions& 
   return shareOn(a, b, o.tolerance_m) >= o.share && shareOn(b, a, o.tolerance_m) >= o.share;
 }
 
+// Whether a and b, two bounds of one junction's connections, are one border of two neighbouring
+// connections drawn twice: they run the same way, start within end_gap_max_m of each other and end
+// so, and lie on top of each other as above (the road lanes they leave share no border there: their
+// probes of one painted line differ by its width).
+bool onTopAlong(const Points& a, const Points& b, const SharedDividerOptions& o) {
+  if (a.size() < 2 || b.size() < 2) return false;
+  const Eigen::Vector2d da = (a.back() - a.front()).head<2>(), db = (b.back() - b.front()).head<2>();
+  if (da.dot(db) <= 0.0) return false;
+  if ((a.front() - b.front()).head<2>().norm() > o.end_gap_max_m || (a.back() - b.back()).head<2>().norm() > o.end_gap_max_m) {
+    return false;
+  }
+  return shareOn(a, b, o.tolerance_m) >= o.share && shareOn(b, a, o.tolerance_m) >= o.share;
+}
+
 // Moves a line's end by `by`, and its points near that end by less the farther they are along it
 // (nothing from taper_m on, or at its other end), so the line does not kink where it was joined.
 void moveEnd(Points& pl, bool at_front, const Eigen::Vector3d& by, double taper_m) {
@@ -75,17 +89,19 @@ size_t shareDividers(map::LaneMap& m, const skeleton::Skeleton& skeleton, const 
            io::orientationProblem(ll, m.lines[left->second], m.lines[right->second]).empty();
   };
   std::set<int64_t> dropped;
-  // Makes a and b one line when they are one divider drawn twice.
-  const auto share = [&](int64_t a, int64_t b) {
+  // Makes a and b one line when they are one divider drawn twice (or, `along`: one border of two
+  // neighbouring connections).
+  const auto share = [&](int64_t a, int64_t b, bool along) {
     if (a == b || dropped.count(a) || dropped.count(b)) return;
     const map::LineString& la = m.lines[line_at.at(a)];
     const map::LineString& lb = m.lines[line_at.at(b)];
-    if (!onTopAgainst(la.points, lb.points, o)) return;
+    if (!(along ? onTopAlong(la.points, lb.points, o) : onTopAgainst(la.points, lb.points, o))) return;
     const bool keep_b = la.type == map::LineType::kVirtual && lb.type != map::LineType::kVirtual;
     const int64_t keep_id = keep_b ? b : a, drop_id = keep_b ? a : b;
     const map::LineString& keep = m.lines[line_at.at(keep_id)];
     const map::LineString& drop = m.lines[line_at.at(drop_id)];
-    // Lines that ended at the dropped line's ends end at the kept line's (it runs the other way).
+    // Lines that ended at the dropped line's ends end at the kept line's (the same end along,
+    // the other against).
     const Eigen::Vector3d drop_front = drop.points.front(), drop_back = drop.points.back();
     const Eigen::Vector3d keep_front = keep.points.front(), keep_back = keep.points.back();
     std::vector<std::pair<size_t, Points>> moved;  // line index, its points before
@@ -97,7 +113,7 @@ size_t shareDividers(map::LaneMap& m, const skeleton::Skeleton& skeleton, const 
         const bool at_drop_front = (end - drop_front).norm() < 1e-6, at_drop_back = (end - drop_back).norm() < 1e-6;
         if (!at_drop_front && !at_drop_back) continue;
         if (moved.empty() || moved.back().first != k) moved.emplace_back(k, l.points);
-        moveEnd(l.points, at_front, (at_drop_front ? keep_back : keep_front) - end, o.taper_m);
+        moveEnd(l.points, at_front, (at_drop_front != along ? keep_back : keep_front) - end, o.taper_m);
       }
     }
     // Every lanelet of the dropped line, and of a line moved, as Lanelet2 will read it; else undone.
@@ -125,12 +141,15 @@ size_t shareDividers(map::LaneMap& m, const skeleton::Skeleton& skeleton, const 
     const auto rev = bounds_of_road.find(road->reverse_id);
     if (rev == bounds_of_road.end()) continue;
     for (int64_t a : lines) {
-      for (int64_t b : rev->second) share(a, b);
+      for (int64_t b : rev->second) share(a, b, false);
     }
   }
   for (const auto& [node, lines] : bounds_of_intersection) {
     for (auto a = lines.begin(); a != lines.end(); ++a) {
-      for (auto b = std::next(a); b != lines.end(); ++b) share(*a, *b);
+      for (auto b = std::next(a); b != lines.end(); ++b) {
+        share(*a, *b, false);
+        share(*a, *b, true);
+      }
     }
   }
   if (!dropped.empty()) {

@@ -20,7 +20,13 @@
 //   end where the kept line ends now, so the lanelets still meet node to node; their points
 //   within taper_m of that end move by less and less (a line moved at its end alone would kink
 //   there: Lanelet2's curvature warning).
-// Lines of one direction on top of each other (a split's lines drawn twice) are left as they are.
+// - Two bounds of one intersection's lanelets that run the same way, start within end_gap_max_m of
+//   each other and end so, and lie on top of each other as above: one border of two neighbouring
+//   connections drawn twice (the lanes they leave share no border at the road's end where their
+//   probes of one painted line differ by its width: seattle_slip_lane, 2026-12-07) become one
+//   line the same way, the lines ending at the dropped one's ends moved to the kept one's.
+// Lines of one road's direction on top of each other are left as they are (toLaneMap shares the
+// borders of neighbouring lanes).
 #pragma once
 
 #include "core/map/lane_map.h"

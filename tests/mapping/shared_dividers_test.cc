@@ -2,7 +2,9 @@
 // its reverse's bounds, or two bounds of one junction's connections, that lie on top of each
 // other and run against each other become one line; the lanelets that had the dropped one take
 // the kept one, and lines that ended where it ended end at the kept line's end, moved smoothly.
-// Lines apart, lines of one direction and bounds of roads that are not each other's reverse stay.
+// Two neighbouring connections of one junction whose facing bounds lie on top of each other share
+// one too. Lines apart, a road's lines of one direction and bounds of roads that are not each
+// other's reverse stay.
 // Constructed lanelets on West Oakland's skeleton (only its roads' reverse ids are used).
 #include "core/io/lanelet2_orientation.h"
 #include "core/mapping/shared_dividers.h"
@@ -154,6 +156,46 @@ TEST(SharedDividers, OppositeConnectionsOfOneJunctionShareTheirBoundOnTheRoadsLi
   EXPECT_EQ(mapping::shareDividers(m, westOakland()), 1u);
   EXPECT_EQ(m.lanelets[1].left_id, 1);
   EXPECT_EQ(mapping::shareDividers(other, westOakland()), 0u);
+}
+
+// Two straight connections side by side through one junction (seattle_slip_lane, truth labels): the
+// left one's right bound and the right one's left bound run the same way 0.08-0.1 m apart, from
+// the ends of two road lanes' bounds (the two probes of one dashed line) to the next road's. They
+// become one line; the road bound that ended at the dropped line's start ends at the kept line's,
+// moved smoothly; the lanelet on the dropped line takes the kept one. Bounds 1 m apart, or from
+// ends 0.8 m apart, stay.
+TEST(SharedDividers, NeighbouringConnectionsOfOneJunctionShareTheBorderBetweenThem) {
+  const auto build = [](double gap, double start_gap) {
+    map::LaneMap m;
+    map::LineString inner = line(3, -3.5 - gap, 0, 20, map::LineType::kVirtual);
+    inner.points.front().y() = -3.5 - start_gap;
+    m.lines = {line(1, 0.0, 0, 20, map::LineType::kVirtual), line(2, -3.5, 0, 20, map::LineType::kVirtual), inner,
+               line(4, -7.0, 0, 20, map::LineType::kVirtual),
+               line(6, -3.5 - start_gap, -10, 0, map::LineType::kDashed)};  // the right road lane's left bound
+    m.lanelets = {lanelet(10, 1, 2, -1.75, 0, 20, -1), lanelet(20, 3, 4, -5.25, 0, 20, -1)};
+    for (auto& ll : m.lanelets) {
+      ll.kind = map::LaneletKind::kIntersection;
+      ll.intersection_id = 77;
+    }
+    return m;
+  };
+  map::LaneMap m = build(0.08, 0.1);
+  EXPECT_EQ(mapping::shareDividers(m, westOakland()), 1u);
+  EXPECT_EQ(m.lanelets[0].right_id, 2);
+  EXPECT_EQ(m.lanelets[1].left_id, 2);
+  EXPECT_EQ(find(m, 3), nullptr);
+  const map::LineString* road = find(m, 6);
+  ASSERT_NE(road, nullptr);
+  EXPECT_NEAR(road->points.back().y(), -3.5, 1e-9);  // its end on the kept line's start
+  EXPECT_NEAR(road->points.back().x(), 0.0, 1e-9);
+  EXPECT_NEAR(road->points.front().y(), -3.6, 1e-9);  // 10 m back: untouched
+  EXPECT_GT(road->points[road->points.size() - 2].y(), -3.6);  // moved by less, 1 m back
+  EXPECT_LT(road->points[road->points.size() - 2].y(), -3.5);
+
+  map::LaneMap apart = build(1.0, 1.0);
+  EXPECT_EQ(mapping::shareDividers(apart, westOakland()), 0u);
+  map::LaneMap ends_apart = build(0.08, 0.8);
+  EXPECT_EQ(mapping::shareDividers(ends_apart, westOakland()), 0u);
 }
 
 }  // namespace

@@ -202,6 +202,11 @@ TEST(EvalTool, TheBenchmarkTableSaysWhereTheMissesAre) {
   EXPECT_EQ(table.find("\n   other "), std::string::npos) << table;
   EXPECT_NE(table.find("POOLED test"), std::string::npos) << table;
   EXPECT_NE(table.find("POOLED b"), std::string::npos) << table;
+  // The maps failing lanemap-check under each label (only "test" was checked), by name.
+  const size_t verdict = table.find("lanemap-check under test: " + std::to_string(failing) + " of 3 maps fail");
+  ASSERT_NE(verdict, std::string::npos) << table;
+  EXPECT_NE(table.find("net-s1", verdict), std::string::npos) << table;
+  EXPECT_EQ(table.find("lanemap-check under b"), std::string::npos) << table;
   EXPECT_NE(runCommand("python3 " + dataPath("../tools/bench/quality_table.py") + " " + dir.str("") + " test --compare test").exit_code, 0);
 }
 

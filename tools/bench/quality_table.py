@@ -27,7 +27,8 @@ benchmark's seeds among them; train.sh's RECIPE=many renders seeds 201 and up.)
 
 With --compare A B (two of the labels: a map before and after a change, e.g. quality.sh's
 "model" and "model-TAG"; given once per pair), a last table lists each network whose figures differ between A and B,
-A's row above B's, then both pooled rows and the networks beating the paper under each: what a
+A's row above B's, then both pooled rows, the networks beating the paper under each, and under
+each the maps that fail lanemap-check, by name: what a
 change to the mapping stages did, network by network (judge it on the pooled rows and on every
 network it made worse).
 
@@ -107,7 +108,7 @@ def misses_line(m):
 
 def lanemap_check(out, drives, lab):
     """The maps of `lab` that lanemap-check failed (its FAIL lines in check-LAB.txt), by requirement."""
-    maps, failing, requirements = 0, 0, {}
+    maps, failing, requirements, failing_maps = 0, 0, {}, []
     for d in drives:
         p = os.path.join(out, d, f"check-{lab}.txt")
         if not os.path.exists(p):
@@ -116,9 +117,21 @@ def lanemap_check(out, drives, lab):
         with open(p) as f:
             failed = [line.split()[1] for line in f if line.startswith("FAIL") and len(line.split()) > 1]
         failing += bool(failed)
+        if failed:
+            failing_maps.append(d)
         for r in failed:
             requirements[r] = requirements.get(r, 0) + 1
-    return {"maps": maps, "failing": failing, "requirements": requirements}
+    return {"maps": maps, "failing": failing, "requirements": requirements, "failing_maps": failing_maps}
+
+
+def check_line(check, label=None):
+    """lanemap-check's verdict as one line; with `label`, naming the failing maps too."""
+    which = ", ".join(f"{k} {v}" for k, v in sorted(check["requirements"].items()))
+    line = f"   lanemap-check{' under ' + label if label else ''}: {check['failing']} of {check['maps']} maps fail a requirement"
+    line += f" ({which})" if which else ""
+    if label and check["failing_maps"]:
+        line += ": " + ", ".join(check["failing_maps"])
+    return line
 
 
 def add(a, b):
@@ -195,6 +208,11 @@ def print_comparison(result, a, b):
     for lab, nets in ((a, na), (b, nb)):
         beat = sorted(n for n, v in nets.items() if beats_paper(v["counts"]))
         print(f"   beating the paper under {lab}: {len(beat)} ({', '.join(beat)})")
+    # A map the change made fail lanemap-check is named here, beside the scores, not only in the
+    # label's own table above.
+    for lab in (a, b):
+        if "lanemap_check" in result[lab]:
+            print(check_line(result[lab]["lanemap_check"], lab))
 
 
 def main():
@@ -249,8 +267,7 @@ def main():
         check = lanemap_check(out, drives, lab)
         if check["maps"]:
             result[lab]["lanemap_check"] = check
-            which = ", ".join(f"{k} {v}" for k, v in sorted(check["requirements"].items()))
-            print(f"   lanemap-check: {check['failing']} of {check['maps']} maps fail a requirement" + (f" ({which})" if which else ""))
+            print(check_line(check))
     for pair in compare:
         print_comparison(result, *pair)
     clean = lambda v: {k: clean(x) for k, x in v.items()} if isinstance(v, dict) else (

@@ -69,9 +69,10 @@ int dropLanesApartFromCarried(const RoadGeometry& road, const std::vector<Carrie
 // lane_width_min_m of its shifted offset is added, over the explored lanes' stretch, as wide as it
 // was carried and with its line types, against the lane inside it (its near bound that lane's
 // bound, so the two share a border; outwards from the explored lanes; one between two explored
-// lanes at its shifted offset); no particle supports it, which its confidence says. Except beyond a kerb: where the outermost explored lane's outer bound is a kerb, the
-// carriageway ends there. The carried lanes are the road before's through lanes
-// (core/mapping/carried_lanes.h): a turn pocket ending at the junction is not among them.
+// lanes at its shifted offset); no particle supports it, which its confidence says. None beyond a
+// kerb: where the outermost explored lane's outer bound is a kerb, the carriageway ends there. The
+// carried lanes are the road before's through lanes (core/mapping/carried_lanes.h): a turn pocket
+// ending at the junction is not among them.
 // options.add_carried_lanes_not_found off: nothing added. Returns how many were added.
 int addCarriedLanesNotFound(const RoadGeometry& road, const std::vector<CarriedLane>& carried,
                             const ExplorerOptions& options, ExplorationResult* explored);

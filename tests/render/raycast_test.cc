@@ -191,8 +191,8 @@ TEST(Raycast, ABoxsBoundingSphereRejectsOnlyRaysThatMissTheBox) {
   }
   EXPECT_GT(hits, 1000);
   EXPECT_GT(rejected, 0.8 * misses);  // and culls most that do not
-  // Grazing: a ray along a face of a unit cube (yaw 0) at 1 um outside it is culled by neither
-  // test's certainty: the box test misses, the sphere (radius sqrt 3) does not reject.
+  // Grazing: a ray along a face of a unit cube (yaw 0), 1 um outside it: the box test misses it,
+  // and the sphere (radius sqrt 3) does not cull it (culling is conservative).
   const PreparedBox cube(makeBox({0, 0, 0}, {1, 1, 1}, 0.0));
   EXPECT_FALSE(cube.missesBound({-5, 1.000001, 0}, {1, 0, 0}, 10.0));
   EXPECT_FALSE(std::isfinite(intersectBox(cube, {-5, 1.000001, 0}, {1, 0, 0}, 0.0, 10.0)));

@@ -44,6 +44,7 @@ struct PassageOptions {
   std::vector<int> smoothing_passes = {0, 5, 20, 80};
   double step_m = 0.5;        // a line is moved at points at most this far apart (a chord gains points)
   bool pairs = true;          // the lanes driven correct the pairing rules of their road pair
+  bool shift_in_lanes = true; // ... also where the rules pair another in lane with the driven out lane
 };
 
 // A displacement field over the normalised arc length u in [0, 1]; zero at both ends.

@@ -601,8 +601,10 @@ class Builder {
   // The rules' pairs of road a to road d corrected by the lanes the car drove (passage.pairs): the
   // rules align a movement's lanes on one side; where the car went from lane i to lane o and the
   // rules pair i with another lane, every pair shifts by that difference (the car showed how the
-  // lanes line up), out of range dropped; then each driven pair is one (its in lane's other pairs
-  // dropped). Unchanged when nothing was driven.
+  // lanes line up), out of range dropped; where the rules pair no lane with i but another in lane
+  // j with o (a road of two lanes into one of one: the rules chose j, the car came from i), every
+  // pair's in lane shifts by i - j the same way; then each driven pair is one (its in lane's other
+  // pairs dropped). Unchanged when nothing was driven.
   std::vector<std::pair<int, int>> withDrivenPairs(const Approach& a, const Approach& d, std::vector<std::pair<int, int>> pairs) {
     if (!o_.passage.pairs) return pairs;
     const auto& driven = drivenPairs(a, d);
@@ -617,6 +619,17 @@ class Builder {
         if (o + shift >= 0 && o + shift < nout) shifted.emplace_back(i, o + shift);
       }
       pairs = std::move(shifted);
+    } else if (rule == pairs.end() && o_.passage.shift_in_lanes) {
+      const auto into = std::find_if(pairs.begin(), pairs.end(), [&](const auto& q) { return q.second == first.out; });
+      if (into != pairs.end()) {
+        const int shift = first.in - into->first;
+        const int nin = static_cast<int>(a.lanes.size());
+        std::vector<std::pair<int, int>> shifted;
+        for (const auto& [i, o] : pairs) {
+          if (i + shift >= 0 && i + shift < nin) shifted.emplace_back(i + shift, o);
+        }
+        pairs = std::move(shifted);
+      }
     }
     for (const auto& p : driven) {
       pairs.erase(std::remove_if(pairs.begin(), pairs.end(), [&](const auto& q) { return q.first == p.in && q.second != p.out; }),
@@ -735,6 +748,7 @@ IntersectionOptions IntersectionOptions::fromYaml(const config::YamlReader& r) {
   r.read("min_bound_radius_m", o.curve.min_bound_radius_m);
   r.read("passage_max_offset_m", o.passage.max_offset_m);
   r.read("passage_pairs", o.passage.pairs);
+  r.read("passage_shift_in_lanes", o.passage.shift_in_lanes);
   r.read("id_base", o.id_base);
   try {
     o.validate();

@@ -18,8 +18,9 @@
 //   the turn across traffic, outer side: the other);
 // - where the car drove from the in road to the out road (passages: driven_passage.h), the lanes
 //   it drove correct the rules of that road pair: the rules' pairs shift by the difference between
-//   the driven out lane and the one the rules give the driven in lane, and the driven pair is one
-//   (passage.pairs);
+//   the driven out lane and the one the rules give the driven in lane (where they give it none but
+//   pair another in lane with the driven out lane, their in lanes shift by that difference:
+//   passage.shift_in_lanes), and the driven pair is one (passage.pairs);
 // - a lane left with no connection continues into the straightest allowed way out (a lane drop
 //   merges rather than ending in the middle of the intersection), when every way out of the
 //   intersection is in the map (otherwise it may be headed for a road the drive did not map).

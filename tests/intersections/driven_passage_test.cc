@@ -4,7 +4,7 @@
 // connections that go around it, for the lane driven and the one beside it; other road pairs keep
 // their Bezier; the map does not depend on the order passages come in. The lanes it drove correct
 // the pairing rules of their road pair (a lane added on the right, where the rules align on the
-// left), unless the path passed between two lanes.
+// left; the lane that feeds a road with fewer lanes), unless the path passed between two lanes.
 #include "core/intersections/driven_passage.h"
 #include "core/intersections/intersections.h"
 #include "core/mapping/map_assembler.h"
@@ -288,6 +288,59 @@ TEST(DrivenPassage, TheLanesDrivenCorrectThePairingOfTheirRoads) {
   // Between the two right out lanes (x = 7.0): no lane of them is clearly the one driven.
   EXPECT_EQ(pairsOf(lanemap::intersections::buildIntersection(sk, node, roads, {}, {}, {drive(7.0)})),
             (Pairs{{0, 0}, {1, 1}}));
+}
+
+// Two lanes into one straight on (perth_peanut_roundabout road 0, monaco, seattle_slip_lane): the
+// rules pair the inner lane with the one lane out (the outer lane, with no pair, runs on into it
+// too); the car came from the outer lane. The rules' pairing shifts by one in lane: the outer lane
+// continues, the inner one (which has its left turn) no longer feeds the lane out as well.
+TEST(DrivenPassage, TheLaneDrivenIntoARoadWithFewerLanesIsTheOneThatFeedsIt) {
+  Net net;
+  net.node(1, 0, -150);
+  net.node(2, 0, 0);
+  net.node(3, 0, 150);
+  net.node(4, -150, 0);
+  net.way(10, {1, 2}, {{"lanes", "4"}});
+  net.way(11, {2, 3}, {{"lanes", "2"}});
+  net.way(12, {2, 4});
+  const auto sk = net.build();
+  int64_t in = -1, out = -1;
+  for (const auto& r : sk.roads()) {
+    const Vector2d a = sk.pointAt(r, 0.0), b = sk.pointAt(r, r.length);
+    if (a.y() < -50 && b.norm() < 1) in = r.id;
+    if (a.norm() < 1 && b.y() > 50) out = r.id;
+  }
+  ASSERT_GE(in, 0);
+  ASSERT_GE(out, 0);
+  const auto roads = lanemap::testing::allLanes(sk, [](const auto& r) {
+    LaneSpec s;
+    s.lanes = lanemap::testing::laneCount(r);
+    return s;
+  });
+  const int64_t node = sk.road(in)->to;
+  const auto pairsOf = [&](const lanemap::intersections::IntersectionResult& r) {
+    std::vector<std::pair<int, int>> out_pairs;
+    for (const auto& c : r.connections) {
+      if (c.in_road == in && c.out_road == out) out_pairs.emplace_back(c.in_index, c.out_index);
+    }
+    std::sort(out_pairs.begin(), out_pairs.end());
+    return out_pairs;
+  };
+  using Pairs = std::vector<std::pair<int, int>>;
+  EXPECT_EQ(pairsOf(lanemap::intersections::buildIntersection(sk, node, roads)), (Pairs{{0, 0}, {1, 0}}));
+  // Northbound: the inner lane at x = 1.75, the outer at 5.25; the lane out at 1.75.
+  DrivenPassage p;
+  p.from_road = in;
+  p.to_road = out;
+  for (double y = -30.0; y <= 30.0; y += 0.5) {
+    const double u = std::clamp((y + 8.0) / 16.0, 0.0, 1.0);
+    p.path.emplace_back(5.25 + (1.75 - 5.25) * u, y);
+  }
+  EXPECT_EQ(pairsOf(lanemap::intersections::buildIntersection(sk, node, roads, {}, {}, {p})), (Pairs{{1, 0}}));
+  lanemap::intersections::IntersectionOptions out_lanes_only;
+  out_lanes_only.passage.shift_in_lanes = false;
+  EXPECT_EQ(pairsOf(lanemap::intersections::buildIntersection(sk, node, roads, out_lanes_only, {}, {p})),
+            (Pairs{{0, 0}, {1, 0}}));
 }
 
 TEST(DrivenPassage, TheMapIsTheSameWhateverOrderPassagesComeIn) {

@@ -43,15 +43,10 @@ Lane laneAtCarriedOffset(const FrenetFrame& frame, double s_begin, double s_end,
 // border line string: laneNeighbours), its centre and far bound parallel to the road at the mean.
 Lane laneAgainst(const FrenetFrame& frame, double s_begin, double s_end, const Lane& inner, bool right,
                  const CarriedLane& c, const ExplorerOptions& o) {
-  const std::vector<double>& bound_d = right ? inner.right.d : inner.left.d;
+  const Boundary& bound = right ? inner.right : inner.left;
+  const bool probed = !inner.waypoint_s.empty() && bound.d.size() == inner.waypoint_s.size();
   const auto boundAt = [&](double s) {
-    const auto& ss = inner.waypoint_s;
-    if (ss.empty() || bound_d.size() != ss.size()) return inner.dAt(s) + (right ? -1.0 : 1.0) * o.default_half_width_m;  // no probes
-    if (s <= ss.front()) return bound_d.front();
-    if (s >= ss.back()) return bound_d.back();
-    const size_t i = std::upper_bound(ss.begin(), ss.end(), s) - ss.begin();
-    const double t = (s - ss[i - 1]) / (ss[i] - ss[i - 1]);
-    return bound_d[i - 1] + t * (bound_d[i] - bound_d[i - 1]);
+    return probed ? boundaryD(inner, bound, s) : inner.dAt(s) + (right ? -1.0 : 1.0) * o.default_half_width_m;
   };
   const double width = c.half_left_m + c.half_right_m;
   const double len = s_end - s_begin;

@@ -167,6 +167,10 @@ ExplorationResult startExploration(const RoadGeometry& road, const ExplorerOptio
 ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road, const ExplorerOptions& options,
                               const std::optional<EgoPose>& ego = std::nullopt, int history_stride = 0);
 
+// A lane boundary's offset at s: its probes (one per way-point), linearly interpolated; the end
+// values beyond them. `b` is l.left or l.right, probed (as many offsets as way-points).
+double boundaryD(const Lane& l, const Boundary& b, double s);
+
 // Removes the lanes whose drop[id] is set (ids are indices into *lanes), renumbers the rest, their
 // split and merge links with them (a link to a removed lane is none), and indexes them from the
 // left again.

@@ -20,8 +20,6 @@ double interp(const std::vector<double>& xs, const std::vector<double>& ys, doub
   return ys[i] + t * (ys[i + 1] - ys[i]);
 }
 
-// A lane boundary's offset at s (its probes, linearly interpolated; the end values beyond them).
-double boundaryD(const Lane& l, const Boundary& b, double s) { return interp(l.waypoint_s, b.d, s); }
 
 // The stations of a lanelet piece [a, b] of lane l: its ends and the lane's way-points between them.
 std::vector<double> pieceStations(const Lane& l, double a, double b) {
@@ -43,6 +41,8 @@ map::LineType sharedType(map::LineType a, map::LineType b) {
 }
 
 }  // namespace
+
+double boundaryD(const Lane& l, const Boundary& b, double s) { return interp(l.waypoint_s, b.d, s); }
 
 std::vector<LaneNeighbours> laneNeighbours(const ExplorationResult& r, const LaneNeighbourOptions& o) {
   std::vector<LaneNeighbours> out;

@@ -23,26 +23,18 @@ double shareOn(const Points& a, const Points& b, double tolerance_m) {
   return static_cast<double>(on) / static_cast<double>(s.size());
 }
 
-// Whether a and b are one divider drawn twice, once for each direction (see the header).
-bool onTopAgainst(const Points& a, const Points& b, const SharedDividerOptions& o) {
+// Whether a and b are one line drawn twice (see the header): running against each other (`along`
+// false: a divider, once for each direction), one's start within end_gap_max_m of the other's end
+// and back; or running the same way (`along`: the border of two neighbouring connections, whose
+// road lanes' probes of one painted line differ by its width), start within that of start and end
+// of end; and each lying on the other.
+bool onTop(const Points& a, const Points& b, bool along, const SharedDividerOptions& o) {
   if (a.size() < 2 || b.size() < 2) return false;
   const Eigen::Vector2d da = (a.back() - a.front()).head<2>(), db = (b.back() - b.front()).head<2>();
-  if (da.dot(db) >= 0.0) return false;
-  if ((a.front() - b.back()).head<2>().norm() > o.end_gap_max_m || (a.back() - b.front()).head<2>().norm() > o.end_gap_max_m) {
-    return false;
-  }
-  return shareOn(a, b, o.tolerance_m) >= o.share && shareOn(b, a, o.tolerance_m) >= o.share;
-}
-
-// Whether a and b, two bounds of one junction's connections, are one border of two neighbouring
-// connections drawn twice: they run the same way, start within end_gap_max_m of each other and end
-// so, and lie on top of each other as above (the road lanes they leave share no border there: their
-// probes of one painted line differ by its width).
-bool onTopAlong(const Points& a, const Points& b, const SharedDividerOptions& o) {
-  if (a.size() < 2 || b.size() < 2) return false;
-  const Eigen::Vector2d da = (a.back() - a.front()).head<2>(), db = (b.back() - b.front()).head<2>();
-  if (da.dot(db) <= 0.0) return false;
-  if ((a.front() - b.front()).head<2>().norm() > o.end_gap_max_m || (a.back() - b.back()).head<2>().norm() > o.end_gap_max_m) {
+  if (along ? da.dot(db) <= 0.0 : da.dot(db) >= 0.0) return false;
+  const Eigen::Vector3d& b_first = along ? b.front() : b.back();
+  const Eigen::Vector3d& b_last = along ? b.back() : b.front();
+  if ((a.front() - b_first).head<2>().norm() > o.end_gap_max_m || (a.back() - b_last).head<2>().norm() > o.end_gap_max_m) {
     return false;
   }
   return shareOn(a, b, o.tolerance_m) >= o.share && shareOn(b, a, o.tolerance_m) >= o.share;
@@ -95,7 +87,7 @@ size_t shareDividers(map::LaneMap& m, const skeleton::Skeleton& skeleton, const 
     if (a == b || dropped.count(a) || dropped.count(b)) return;
     const map::LineString& la = m.lines[line_at.at(a)];
     const map::LineString& lb = m.lines[line_at.at(b)];
-    if (!(along ? onTopAlong(la.points, lb.points, o) : onTopAgainst(la.points, lb.points, o))) return;
+    if (!onTop(la.points, lb.points, along, o)) return;
     const bool keep_b = la.type == map::LineType::kVirtual && lb.type != map::LineType::kVirtual;
     const int64_t keep_id = keep_b ? b : a, drop_id = keep_b ? a : b;
     const map::LineString& keep = m.lines[line_at.at(keep_id)];

@@ -12,7 +12,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
+#include <string>
+#include <vector>
 
 namespace {
 
@@ -229,65 +233,77 @@ TEST(DrivenPassage, APathThatPassesNoLaneEndShapesNothing) {
   for (const auto& c : shaped.connections) EXPECT_EQ(c.passages, 0);
 }
 
-// Straight on from two lanes to three (a lane added on the right). Untagged, the rules pair the
-// lanes by their offsets from the road's line: 0 -> 0, 1 -> 1. The car drove from the right lane
-// into the new right lane: the lanes line up on the right, 0 -> 1, 1 -> 2. A path that crosses the
-// junction between two out lanes (changing lanes there) says nothing.
-TEST(DrivenPassage, TheLanesDrivenCorrectThePairingOfTheirRoads) {
+// A straight-on junction: road 10 (four lanes, two each way) northbound into road 11 (`lanes_out`
+// lanes in all), a side road west, every road mapped with its OSM lane count. pairs() lists the
+// connections from the northbound in road to the northbound out road; path() is a passage between
+// them from x_in to x_out (north-bound lanes lie right of the line, 3.5 m wide).
+lanemap::skeleton::Skeleton straightOnNet(const std::string& lanes_out) {
   Net net;
   net.node(1, 0, -150);
   net.node(2, 0, 0);
   net.node(3, 0, 150);
   net.node(4, -150, 0);
   net.way(10, {1, 2}, {{"lanes", "4"}});
-  net.way(11, {2, 3}, {{"lanes", "6"}});
+  net.way(11, {2, 3}, {{"lanes", lanes_out}});
   net.way(12, {2, 4});
-  const auto sk = net.build();
-  int64_t in = -1, out = -1;
-  for (const auto& r : sk.roads()) {
-    const Vector2d a = sk.pointAt(r, 0.0), b = sk.pointAt(r, r.length);
-    if (a.y() < -50 && b.norm() < 1) in = r.id;
-    if (a.norm() < 1 && b.y() > 50) out = r.id;
+  return net.build();
+}
+
+struct StraightOn {
+  explicit StraightOn(const std::string& lanes_out) : sk(straightOnNet(lanes_out)) {
+    for (const auto& r : sk.roads()) {
+      const Vector2d a = sk.pointAt(r, 0.0), b = sk.pointAt(r, r.length);
+      if (a.y() < -50 && b.norm() < 1) in = r.id;
+      if (a.norm() < 1 && b.y() > 50) out = r.id;
+    }
+    roads = lanemap::testing::allLanes(sk, [](const auto& r) {
+      LaneSpec s;
+      s.lanes = lanemap::testing::laneCount(r);
+      return s;
+    });
   }
-  ASSERT_GE(in, 0);
-  ASSERT_GE(out, 0);
-  const auto roads = lanemap::testing::allLanes(sk, [](const auto& r) {
-    LaneSpec s;
-    s.lanes = lanemap::testing::laneCount(r);
-    return s;
-  });
-  const int64_t node = sk.road(in)->to;
-  const auto pairsOf = [&](const lanemap::intersections::IntersectionResult& r) {
+  std::vector<std::pair<int, int>> pairs(const lanemap::intersections::IntersectionOptions& o = {},
+                                         const std::vector<DrivenPassage>& passages = {}) const {
+    const auto r = lanemap::intersections::buildIntersection(sk, sk.road(in)->to, roads, o, {}, passages);
     std::vector<std::pair<int, int>> out_pairs;
     for (const auto& c : r.connections) {
       if (c.in_road == in && c.out_road == out) out_pairs.emplace_back(c.in_index, c.out_index);
     }
     std::sort(out_pairs.begin(), out_pairs.end());
     return out_pairs;
-  };
-  using Pairs = std::vector<std::pair<int, int>>;
-  EXPECT_EQ(pairsOf(lanemap::intersections::buildIntersection(sk, node, roads)), (Pairs{{0, 0}, {1, 1}}));
-
-  // Northbound lanes right of the line: the right lane at x = 5.25, the new right lane at 8.75.
-  const auto drive = [&](double x_out) {
+  }
+  DrivenPassage path(double x_in, double x_out) const {
     DrivenPassage p;
     p.from_road = in;
     p.to_road = out;
     for (double y = -30.0; y <= 30.0; y += 0.5) {
       const double u = std::clamp((y + 8.0) / 16.0, 0.0, 1.0);
-      p.path.emplace_back(5.25 + (x_out - 5.25) * u, y);
+      p.path.emplace_back(x_in + (x_out - x_in) * u, y);
     }
     return p;
-  };
-  const auto driven = lanemap::intersections::buildIntersection(sk, node, roads, {}, {}, {drive(8.75)});
-  EXPECT_EQ(pairsOf(driven), (Pairs{{0, 1}, {1, 2}}));
+  }
+  lanemap::skeleton::Skeleton sk;
+  std::map<int64_t, lanemap::map::LaneMap> roads;
+  int64_t in = -1, out = -1;
+};
+
+// Straight on from two lanes to three (a lane added on the right). Untagged, the rules pair the
+// lanes by their offsets from the road's line: 0 -> 0, 1 -> 1. The car drove from the right lane
+// into the new right lane: the lanes line up on the right, 0 -> 1, 1 -> 2. A path that crosses the
+// junction between two out lanes (changing lanes there) says nothing.
+TEST(DrivenPassage, TheLanesDrivenCorrectThePairingOfTheirRoads) {
+  const StraightOn j("6");
+  ASSERT_GE(j.in, 0);
+  ASSERT_GE(j.out, 0);
+  using Pairs = std::vector<std::pair<int, int>>;
+  EXPECT_EQ(j.pairs(), (Pairs{{0, 0}, {1, 1}}));
+  // Northbound lanes right of the line: the right lane at x = 5.25, the new right lane at 8.75.
+  EXPECT_EQ(j.pairs({}, {j.path(5.25, 8.75)}), (Pairs{{0, 1}, {1, 2}}));
   lanemap::intersections::IntersectionOptions rules_only;
   rules_only.passage.pairs = false;
-  EXPECT_EQ(pairsOf(lanemap::intersections::buildIntersection(sk, node, roads, rules_only, {}, {drive(8.75)})),
-            (Pairs{{0, 0}, {1, 1}}));
+  EXPECT_EQ(j.pairs(rules_only, {j.path(5.25, 8.75)}), (Pairs{{0, 0}, {1, 1}}));
   // Between the two right out lanes (x = 7.0): no lane of them is clearly the one driven.
-  EXPECT_EQ(pairsOf(lanemap::intersections::buildIntersection(sk, node, roads, {}, {}, {drive(7.0)})),
-            (Pairs{{0, 0}, {1, 1}}));
+  EXPECT_EQ(j.pairs({}, {j.path(5.25, 7.0)}), (Pairs{{0, 0}, {1, 1}}));
 }
 
 // Two lanes into one straight on (perth_peanut_roundabout road 0, monaco, seattle_slip_lane): the
@@ -295,52 +311,16 @@ TEST(DrivenPassage, TheLanesDrivenCorrectThePairingOfTheirRoads) {
 // too); the car came from the outer lane. The rules' pairing shifts by one in lane: the outer lane
 // continues, the inner one (which has its left turn) no longer feeds the lane out as well.
 TEST(DrivenPassage, TheLaneDrivenIntoARoadWithFewerLanesIsTheOneThatFeedsIt) {
-  Net net;
-  net.node(1, 0, -150);
-  net.node(2, 0, 0);
-  net.node(3, 0, 150);
-  net.node(4, -150, 0);
-  net.way(10, {1, 2}, {{"lanes", "4"}});
-  net.way(11, {2, 3}, {{"lanes", "2"}});
-  net.way(12, {2, 4});
-  const auto sk = net.build();
-  int64_t in = -1, out = -1;
-  for (const auto& r : sk.roads()) {
-    const Vector2d a = sk.pointAt(r, 0.0), b = sk.pointAt(r, r.length);
-    if (a.y() < -50 && b.norm() < 1) in = r.id;
-    if (a.norm() < 1 && b.y() > 50) out = r.id;
-  }
-  ASSERT_GE(in, 0);
-  ASSERT_GE(out, 0);
-  const auto roads = lanemap::testing::allLanes(sk, [](const auto& r) {
-    LaneSpec s;
-    s.lanes = lanemap::testing::laneCount(r);
-    return s;
-  });
-  const int64_t node = sk.road(in)->to;
-  const auto pairsOf = [&](const lanemap::intersections::IntersectionResult& r) {
-    std::vector<std::pair<int, int>> out_pairs;
-    for (const auto& c : r.connections) {
-      if (c.in_road == in && c.out_road == out) out_pairs.emplace_back(c.in_index, c.out_index);
-    }
-    std::sort(out_pairs.begin(), out_pairs.end());
-    return out_pairs;
-  };
+  const StraightOn j("2");
+  ASSERT_GE(j.in, 0);
+  ASSERT_GE(j.out, 0);
   using Pairs = std::vector<std::pair<int, int>>;
-  EXPECT_EQ(pairsOf(lanemap::intersections::buildIntersection(sk, node, roads)), (Pairs{{0, 0}, {1, 0}}));
+  EXPECT_EQ(j.pairs(), (Pairs{{0, 0}, {1, 0}}));
   // Northbound: the inner lane at x = 1.75, the outer at 5.25; the lane out at 1.75.
-  DrivenPassage p;
-  p.from_road = in;
-  p.to_road = out;
-  for (double y = -30.0; y <= 30.0; y += 0.5) {
-    const double u = std::clamp((y + 8.0) / 16.0, 0.0, 1.0);
-    p.path.emplace_back(5.25 + (1.75 - 5.25) * u, y);
-  }
-  EXPECT_EQ(pairsOf(lanemap::intersections::buildIntersection(sk, node, roads, {}, {}, {p})), (Pairs{{1, 0}}));
+  EXPECT_EQ(j.pairs({}, {j.path(5.25, 1.75)}), (Pairs{{1, 0}}));
   lanemap::intersections::IntersectionOptions out_lanes_only;
   out_lanes_only.passage.shift_in_lanes = false;
-  EXPECT_EQ(pairsOf(lanemap::intersections::buildIntersection(sk, node, roads, out_lanes_only, {}, {p})),
-            (Pairs{{0, 0}, {1, 0}}));
+  EXPECT_EQ(j.pairs(out_lanes_only, {j.path(5.25, 1.75)}), (Pairs{{0, 0}, {1, 0}}));
 }
 
 TEST(DrivenPassage, TheMapIsTheSameWhateverOrderPassagesComeIn) {

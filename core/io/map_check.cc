@@ -25,6 +25,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <tuple>
 #include <unordered_map>
 
 namespace lanemap::io {
@@ -226,6 +227,34 @@ std::vector<CheckResult> checkLanelet2Map(const std::string& path, const MapChec
       for (const auto& p : geo::pointsEvery(shapes[w], 0.5 * cell)) cells.insert(key(p));
       for (int64_t k : cells) grid[k].push_back(w);
     }
+    // Two lanelets that merge (both bounds end at the same two nodes: two lanes into one) or split
+    // (both start at the same two nodes) are not neighbours: their bounds converge there by design,
+    // and a lanelet short enough to lie wholly on the other's converging end is no defect.
+    std::set<std::pair<int64_t, int64_t>> converging;
+    {
+      const auto ends = [&](int64_t way, bool last) -> int64_t {
+        const auto it = osm.ways.find(way);
+        if (it == osm.ways.end() || it->second.refs.empty()) return 0;
+        return last ? it->second.refs.back() : it->second.refs.front();
+      };
+      std::map<std::tuple<int64_t, int64_t, bool>, std::vector<const L*>> by_ends;
+      for (const auto& l : lanelets) {
+        if (!bounds.count(l.left)) continue;
+        for (bool last : {false, true}) {
+          const int64_t a = ends(l.left, last), b = ends(l.right, last);
+          if (a != 0 && b != 0) by_ends[{a, b, last}].push_back(&l);
+        }
+      }
+      for (const auto& [key, group] : by_ends) {
+        for (size_t i = 0; i < group.size(); ++i) {
+          for (size_t j = i + 1; j < group.size(); ++j) {
+            for (int64_t a : {group[i]->left, group[i]->right}) {
+              for (int64_t b : {group[j]->left, group[j]->right}) converging.insert({std::min(a, b), std::max(a, b)});
+            }
+          }
+        }
+      }
+    }
     std::set<int64_t> bad;
     for (int64_t w : bounds) {
       const auto s = geo::pointsEvery(shapes[w], 1.0);
@@ -244,7 +273,7 @@ std::vector<CheckResult> checkLanelet2Map(const std::string& path, const MapChec
         }
       }
       for (const auto& [o, n] : close) {
-        if (n >= 0.9 * s.size()) {
+        if (n >= 0.9 * s.size() && !converging.count({std::min(w, o), std::max(w, o)})) {
           bad.insert(std::min(w, o));
           bad.insert(std::max(w, o));
         }

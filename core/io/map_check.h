@@ -10,7 +10,9 @@
 //                     dashed lines (line_thin/line_thick subtype dashed)
 //   shared_borders    neighbouring lanelets share their border: no two different line strings of
 //                     two lanelets run on top of each other (within 0.1 m for 90 % of the shorter);
-//                     crosswalk and walkway lanelets are not lanes' neighbours and do not count
+//                     crosswalk and walkway lanelets are not lanes' neighbours and do not count,
+//                     nor are two lanelets that merge (both bounds end at the same two nodes) or
+//                     split (start at the same two nodes): their bounds converge there
 //   bounds_apart      a lanelet's left and right bound share no node
 //   centerline_inside every point of a lanelet's centerline lies inside its lanelet (0.1 m slack)
 //   one_lanelet_per_intersection_path  (lanemap sidecar) no intersection lanelet is followed by

@@ -133,6 +133,25 @@ TEST(MapCheck, EachBrokenRuleFailsAlone) {
     // Line 2 is now between no two lanelets, so lane_change does not apply to it.
     EXPECT_EQ(f, (Failures{{"shared_borders", {2, 7}}})) << f.size();
   }
+  {  // lanelet 103, 1.5 m long, merging into lanelet 102's end (both end at the same two nodes) on
+     // its own copies of 102's bounds: a merge, not two neighbours, so it passes ...
+    LaneMap m = goodMap();
+    m.lines.push_back(line(10, LineType::kVirtual, alongX(68.5, 70, 3.5, 2)));
+    m.lines.push_back(line(11, LineType::kVirtual, alongX(68.5, 70, 0.0, 2)));
+    m.lanelets.push_back(lanelet(m, 103, 10, 11));
+    m.lanelets.back().kind = LaneletKind::kIntersection;
+    m.lanelets.back().intersection_id = 9;
+    writeLanelet2(m, dir.str("merge.osm"));
+    EXPECT_EQ(failures(dir.str("merge.osm")), Failures{});
+    // ... but ending 5 cm short of 102's end (no shared node) it lies on 102 as a neighbour would.
+    m.lines[6].points.back().x() = 69.9;
+    m.lines[7].points.back().x() = 69.9;
+    m.lanelets.back() = lanelet(m, 103, 10, 11);
+    m.lanelets.back().kind = LaneletKind::kIntersection;
+    m.lanelets.back().intersection_id = 9;
+    writeLanelet2(m, dir.str("merge-short.osm"));
+    EXPECT_EQ(failures(dir.str("merge-short.osm")), (Failures{{"shared_borders", {4, 5, 10, 11}}}));
+  }
   {  // lanelet 101 narrowing to a point: its bounds share their last node
     LaneMap m = goodMap();
     m.lines[2].points.back() = m.lines[1].points.back();

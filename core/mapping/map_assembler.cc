@@ -1,6 +1,7 @@
 #include "core/mapping/map_assembler.h"
 
 #include "core/mapping/shared_dividers.h"
+#include "core/mapping/two_way_links.h"
 
 #include <algorithm>
 #include <set>
@@ -18,7 +19,34 @@ MapAssembler::MapAssembler(const skeleton::Skeleton& skeleton, intersections::In
 }
 
 void MapAssembler::setRoad(int64_t road_id, map::LaneMap lanes) {
+  // A two-way link's two directions cut to the stretch both cover (two_way_links.h), from the two
+  // as set (kept for the roads that may be cut only), the lower road id first: the same whatever
+  // order the two came in.
+  const bool link = mayMatchTwoWayLink(lanes, skeleton_, road_id);
+  if (link) {
+    as_set_[road_id] = lanes;
+  } else {
+    as_set_.erase(road_id);
+  }
   roads_[road_id] = std::move(lanes);
+  markEnds(road_id);
+  const auto* road = skeleton_.road(road_id);
+  if (!road || road->reverse_id < 0) return;
+  const auto other = as_set_.find(road->reverse_id);
+  if (other == as_set_.end()) return;
+  markEnds(road->reverse_id);
+  if (!link) {  // no link now: the reverse as it was set
+    roads_[road->reverse_id] = other->second;
+    return;
+  }
+  const int64_t a = std::min(road_id, road->reverse_id), b = std::max(road_id, road->reverse_id);
+  map::LaneMap la = as_set_.at(a), lb = as_set_.at(b);
+  if (matchTwoWayLink(la, a, lb, b, skeleton_)) ++two_way_links_cut_;
+  roads_[a] = std::move(la);
+  roads_[b] = std::move(lb);
+}
+
+void MapAssembler::markEnds(int64_t road_id) {
   if (const auto* road = skeleton_.road(road_id)) {
     for (const int64_t node : {road->from, road->to}) {
       if (const auto it = index_of_intersection_.find(node); it != index_of_intersection_.end()) marked_.insert(it->second);

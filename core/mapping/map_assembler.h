@@ -33,9 +33,14 @@ class MapAssembler {
                std::vector<osm::Restriction> restrictions = {});
 
   // Replaces the lanes of one road (a road driven again is mapped again on everything seen) and
-  // marks the intersections at its two ends for update().
+  // marks the intersections at its two ends for update(). A two-way link's two directions, once
+  // both are set, are cut to the stretch both cover (two_way_links.h; both set again from the
+  // lanes as given, so the outcome does not depend on the order).
   void setRoad(int64_t road_id, map::LaneMap lanes);
+  // Every road's lanes as in the map (two-way links cut).
   const std::map<int64_t, map::LaneMap>& roads() const { return roads_; }
+  // How often setting a road cut a two-way link's two directions to one stretch.
+  size_t twoWayLinksCut() const { return two_way_links_cut_; }
 
   // The car's path from one road to the next through their intersection (driven_passage.h): it
   // shapes that road pair's connections; marks the intersection for update(). Kept in a fixed
@@ -68,7 +73,10 @@ class MapAssembler {
   const skeleton::Skeleton& skeleton_;
   intersections::IntersectionOptions options_;
   std::vector<osm::Restriction> restrictions_;
-  std::map<int64_t, map::LaneMap> roads_;
+  void markEnds(int64_t road_id);
+  std::map<int64_t, map::LaneMap> roads_;   // as in the map
+  std::map<int64_t, map::LaneMap> as_set_;  // as setRoad was given them: two-way links only
+  size_t two_way_links_cut_ = 0;
   std::map<int64_t, size_t> index_of_intersection_;  // intersection id -> index in the skeleton's list
   std::map<size_t, Built> built_;                     // by that index: ordered as the skeleton's list
   std::map<size_t, std::vector<intersections::DrivenPassage>> passages_;  // by that index

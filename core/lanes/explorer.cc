@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
+#include <optional>
 #include <random>
 #include <unordered_map>
 #include <utility>
@@ -556,6 +558,66 @@ RoadGeometry explorationStretch(const RoadGeometry& road, double length, const E
   }
   return r;
 }
+
+namespace {
+
+// A link between close junctions (its stretch between the two ROIs under short_road_min_m): the ROIs
+// say nothing of where its lanes are, its painted lines do. Lane lines (dashed or solid) that run
+// along the road, a column of the straightened raster holding one for short_road_line_run_m or more
+// (gaps under 0.3 m bridged: a line seen with holes; a line across the road, another road's, is a
+// few rows long), and that reach into the stretch explorationStretch chose: the stretch becomes
+// their extent along s, at most short_road_min_m around its middle. nullopt (that stretch stays)
+// on a longer road, with the rule off, or where such lines cover under 2 m.
+std::optional<RoadGeometry> shortLinkStretch(const bev::BevGrid& grid, const FrenetFrame& frame, const RoadGeometry& road_in,
+                                             const RoadGeometry& stretch, const ExplorerOptions& o) {
+  const double length = frame.length();
+  const double own_end = std::min(road_in.s_end, length);
+  if (o.short_road_line_run_m <= 0.0 || own_end - std::clamp(road_in.s_begin, 0.0, own_end) >= o.short_road_min_m) {
+    return std::nullopt;
+  }
+  RoadGeometry whole = stretch;
+  whole.s_begin = 0.0;
+  whole.s_end = length;
+  const Raster r = buildRaster(grid, frame, whole, o);
+  const int min_rows = static_cast<int>(std::ceil(o.short_road_line_run_m / r.res - 1e-9));
+  const int max_gap = static_cast<int>(std::round(0.3 / r.res));
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int j = 0; j < r.nd; ++j) {
+    int first = -1, last = -1;
+    const auto close = [&] {
+      if (first < 0 || last - first + 1 < min_rows) return;
+      const double a = r.sOf(first) - 0.5 * r.res, b = r.sOf(last) + 0.5 * r.res;
+      if (b < stretch.s_begin || a > stretch.s_end) return;
+      lo = std::min(lo, a);
+      hi = std::max(hi, b);
+    };
+    for (int i = 0; i < r.ns; ++i) {
+      const uint8_t c = r.at(i, j);
+      if (c != kDashed && c != kSolid) continue;
+      if (first >= 0 && i - last - 1 > max_gap) {
+        close();
+        first = -1;
+      }
+      if (first < 0) first = i;
+      last = i;
+    }
+    close();
+  }
+  lo = std::max(lo, 0.0);
+  hi = std::min(hi, length);
+  if (!(hi - lo >= 2.0)) return std::nullopt;
+  if (hi - lo > o.short_road_min_m) {
+    const double mid = 0.5 * (lo + hi);
+    lo = mid - 0.5 * o.short_road_min_m;
+    hi = mid + 0.5 * o.short_road_min_m;
+  }
+  RoadGeometry placed = stretch;
+  placed.s_begin = lo;
+  placed.s_end = hi;
+  return placed;
+}
+
+}  // namespace
 
 int ExplorationResult::laneCountAt(double s) const {
   int n = 0;
@@ -1685,6 +1747,7 @@ ExplorationResult exploreRoad(const bev::BevGrid& grid, const RoadGeometry& road
   RoadGeometry road;
   ExplorationResult res = startExploration(road_in, o, &road);
   const FrenetFrame* frame = res.frame.get();
+  if (auto placed = shortLinkStretch(grid, *frame, road_in, road, o)) road = std::move(*placed);
   const double s_stop = road.s_end;
   double s_start = road.s_begin;
   if (ego) s_start = std::clamp(frame->toFrenet(ego->position).x(), s_start, s_stop);

@@ -153,7 +153,8 @@ const char* toString(RasterClass c);
 
 // The stretch [s_begin, s_end] of a road that exploreRoad explores (the road's own, between its
 // two ROIs, clamped to the polyline's length; on a road shorter there than
-// options.short_road_min_m, that much around the stretch's middle).
+// options.short_road_min_m, that much around the stretch's middle, which exploreRoad then moves
+// to where the link's painted lines run, when they do: short_road_line_run_m).
 RoadGeometry explorationStretch(const RoadGeometry& road, double length, const ExplorerOptions& options);
 
 // Runs Algorithm 1 on a road's BEV grid. Deterministic for options.seed. Throws LanesError on a

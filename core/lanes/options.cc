@@ -64,6 +64,7 @@ ExplorerOptions ExplorerOptions::fromYaml(const config::YamlReader& r) {
   r.read("same_lane_m", o.same_lane_m);
   r.read("min_lane_length_m", o.min_lane_length_m);
   r.read("short_road_min_m", o.short_road_min_m);
+  r.read("short_road_line_run_m", o.short_road_line_run_m);
   r.read("partial_min_driven_m", o.partial_min_driven_m);
   r.read("carry_lanes_max_m", o.carry_lanes_max_m);
   r.read("carry_max_turn_rad", o.carry_max_turn_rad);
@@ -135,6 +136,7 @@ void ExplorerOptions::validate() const {
   need(dbscan_eps_m > 0 && dbscan_min_points >= 1, "dbscan");
   need(track_tolerance_m >= 0 && lane_gap_max_m >= 0 && same_lane_m >= 0 && min_lane_length_m >= 0 && bulge_density_fraction >= 0 && weak_density_fraction >= 0, "tracking");
   need(short_road_min_m >= 1.0 && short_road_min_m <= 100.0, "short_road_min_m in [1, 100]");
+  need(short_road_line_run_m >= 0.0 && short_road_line_run_m <= 100.0, "short_road_line_run_m in [0, 100]");
   need(partial_min_driven_m >= 0 && std::isfinite(partial_min_driven_m), "partial_min_driven_m >= 0");
   need(bin_m > 0 && break_spacing_m >= bin_m && break_penalty_m2 >= 0, "regression");
   need(waypoint_spacing_m > 0, "waypoint_spacing_m > 0");

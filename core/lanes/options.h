@@ -88,7 +88,10 @@ struct ExplorerOptions {
                                          //   between its ROIs: shorter than 0.8 of that stretch)
   double short_road_min_m = 6.0;         // a road whose stretch between its two ROIs is shorter (a
                                          //   link between close junctions) is explored over this
-                                         //   much around the stretch's middle, into the ROIs
+                                         //   much around the stretch's middle, into the ROIs ...
+  double short_road_line_run_m = 1.0;    // ... or, where its painted lines run along it in runs of
+                                         //   at least this much, over their extent (at most
+                                         //   short_road_min_m; shortLinkStretch) (0: never)
   double partial_min_driven_m = 2.0;     // the road a drive ended on is mapped when the car got this
                                          //   far past its start ROI (core/mapping/partial_road.h);
                                          //   under short_road_min_m driven, the stretch explored

@@ -525,6 +525,43 @@ TEST(Explorer, TwelveMetreLinkRoad) {
   EXPECT_EQ(toLaneMap(res).lanelets.size(), 2u);
 }
 
+// Issue 16: a link between two close junctions whose ROIs overlap (they leave 0.4 m around its
+// middle, at 8 m) is explored where its painted lines run. The lane lines of this 16 m link lie
+// over 7.5-11.5 m (the junction at its start reaches further along it than the one at its end),
+// junction asphalt and kerbs either side. Its two lanes run over the lines' extent; with the rule
+// off (short_road_line_run_m 0), over the 6 m around the middle, 1.5 m into the first junction.
+TEST(Explorer, ALinksLanesLieWhereItsLinesRun) {
+  Scenario sc = straightLanes({3.5, 3.4}, 16.0);
+  for (auto& l : sc.layout.lines) {
+    if (l.kind != Line::kCurb) {
+      l.s0 = 7.5;
+      l.s1 = 11.5;
+    }
+  }
+  const bev::BevGrid grid = paint(sc.layout);
+  RoadGeometry road;
+  road.road_id = 9;
+  road.polyline = sc.layout.ref.polyline(2.0);
+  road.s_begin = 7.8;
+  road.s_end = 8.2;
+  ExplorerOptions opt;
+  const ExplorationResult res = exploreRoad(grid, road, opt);
+  ASSERT_EQ(res.lanes.size(), 2u);
+  for (const Lane& l : res.lanes) {
+    EXPECT_NEAR(l.s_begin, 7.5, 0.15) << "lane " << l.id;
+    EXPECT_NEAR(l.s_end, 11.5, 0.15) << "lane " << l.id;
+    const double truth_d = sc.truth[l.index_from_left].d(0);
+    for (const auto& p : l.waypoints) EXPECT_NEAR(sc.layout.ref.toSD(p).y(), truth_d, 0.25) << "lane " << l.id;
+  }
+  opt.short_road_line_run_m = 0.0;
+  const ExplorationResult middle = exploreRoad(grid, road, opt);
+  ASSERT_EQ(middle.lanes.size(), 2u);
+  for (const Lane& l : middle.lanes) {
+    EXPECT_NEAR(l.s_begin, 5.0, 1e-6) << "lane " << l.id;
+    EXPECT_NEAR(l.s_end, 11.0, 1e-6) << "lane " << l.id;
+  }
+}
+
 // A road 9 m long between its ROIs: shorter than min_lane_length_m (10 m), so its lanes were
 // dropped; a lane covering most of the stretch is kept.
 TEST(Explorer, NineMetreStretchKeepsItsLanes) {

@@ -529,7 +529,7 @@ TEST(Explorer, TwelveMetreLinkRoad) {
 // middle, at 8 m) is explored where its painted lines run. The lane lines of this 16 m link lie
 // over 7.5-11.5 m (the junction at its start reaches further along it than the one at its end),
 // junction asphalt and kerbs either side. Its two lanes run over the lines' extent; with the rule
-// off (short_road_line_run_m 0), over the 6 m around the middle, 1.5 m into the first junction.
+// off (short_road_line_run_m 0), over the 6 m around the middle, 2.5 m into the first junction.
 TEST(Explorer, ALinksLanesLieWhereItsLinesRun) {
   Scenario sc = straightLanes({3.5, 3.4}, 16.0);
   for (auto& l : sc.layout.lines) {

@@ -1,5 +1,7 @@
 #include "core/mapping/two_way_links.h"
 
+#include "core/geo/polyline.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -54,9 +56,7 @@ std::optional<std::pair<double, double>> laneletStretch(const map::LaneMap& lane
   std::vector<std::pair<double, double>> each;
   for (const auto& l : lanes.lanelets) {
     if (l.kind != map::LaneletKind::kRoad || l.road_id != road_id || l.partial || l.centre.size() < 2) return std::nullopt;
-    double length = 0.0;
-    for (size_t i = 1; i < l.centre.size(); ++i) length += (l.centre[i] - l.centre[i - 1]).head<2>().norm();
-    if (length > o.max_length_m + o.piece_tolerance_m) return std::nullopt;  // no link: nothing to project
+    if (geo::polylineLengthXy(l.centre) > o.max_length_m + o.piece_tolerance_m) return std::nullopt;  // no link: nothing to project
     const std::vector<double> s = stations(l.centre, sk, on_road);
     each.emplace_back(*std::min_element(s.begin(), s.end()), *std::max_element(s.begin(), s.end()));
   }

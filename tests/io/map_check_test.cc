@@ -46,6 +46,14 @@ map::Lanelet lanelet(const LaneMap& m, int64_t id, int64_t left, int64_t right) 
   return ll;
 }
 
+// An intersection lanelet of intersection 9 between lines left and right.
+map::Lanelet intersectionLanelet(const LaneMap& m, int64_t id, int64_t left, int64_t right) {
+  map::Lanelet ll = lanelet(m, id, left, right);
+  ll.kind = LaneletKind::kIntersection;
+  ll.intersection_id = 9;
+  return ll;
+}
+
 // Two eastbound lanes sharing dashed line 2 (lanelets 100, 101), lanelet 101 ending at stop line 6,
 // and intersection lanelet 102 of intersection 9 after lanelet 100. Node ids start at 106 (after
 // the 6 lines, 3 lanelets and 3 centre lines; 107 in Autoware's layout, after the road_marking).
@@ -59,11 +67,9 @@ LaneMap goodMap() {
   m.lines.push_back(line(4, LineType::kVirtual, alongX(50, 70, 3.5, 3)));
   m.lines.push_back(line(5, LineType::kVirtual, alongX(50, 70, 0.0, 3)));
   m.lines.push_back(line(6, LineType::kStopLine, {{50, 0, 0}, {50, -3.5, 0}}));
-  m.lanelets = {lanelet(m, 100, 1, 2), lanelet(m, 101, 2, 3), lanelet(m, 102, 4, 5)};
+  m.lanelets = {lanelet(m, 100, 1, 2), lanelet(m, 101, 2, 3), intersectionLanelet(m, 102, 4, 5)};
   m.lanelets[0].successors = {102};
   m.lanelets[1].stop_line_id = 6;
-  m.lanelets[2].kind = LaneletKind::kIntersection;
-  m.lanelets[2].intersection_id = 9;
   m.lanelets[2].turn = map::TurnDirection::kStraight;
   return m;
 }
@@ -138,17 +144,13 @@ TEST(MapCheck, EachBrokenRuleFailsAlone) {
     LaneMap m = goodMap();
     m.lines.push_back(line(10, LineType::kVirtual, alongX(68.5, 70, 3.5, 2)));
     m.lines.push_back(line(11, LineType::kVirtual, alongX(68.5, 70, 0.0, 2)));
-    m.lanelets.push_back(lanelet(m, 103, 10, 11));
-    m.lanelets.back().kind = LaneletKind::kIntersection;
-    m.lanelets.back().intersection_id = 9;
+    m.lanelets.push_back(intersectionLanelet(m, 103, 10, 11));
     writeLanelet2(m, dir.str("merge.osm"));
     EXPECT_EQ(failures(dir.str("merge.osm")), Failures{});
-    // ... but ending 5 cm short of 102's end (no shared node) it lies on 102 as a neighbour would.
+    // ... but ending 10 cm short of 102's end (no shared node) it lies on 102 as a neighbour would.
     m.lines[6].points.back().x() = 69.9;
     m.lines[7].points.back().x() = 69.9;
-    m.lanelets.back() = lanelet(m, 103, 10, 11);
-    m.lanelets.back().kind = LaneletKind::kIntersection;
-    m.lanelets.back().intersection_id = 9;
+    m.lanelets.back() = intersectionLanelet(m, 103, 10, 11);
     writeLanelet2(m, dir.str("merge-short.osm"));
     EXPECT_EQ(failures(dir.str("merge-short.osm")), (Failures{{"shared_borders", {4, 5, 10, 11}}}));
   }
@@ -178,9 +180,7 @@ TEST(MapCheck, EachBrokenRuleFailsAlone) {
     LaneMap m = goodMap();
     m.lines.push_back(line(8, LineType::kVirtual, alongX(70, 80, 3.5, 2)));
     m.lines.push_back(line(9, LineType::kVirtual, alongX(70, 80, 0.0, 2)));
-    m.lanelets.push_back(lanelet(m, 103, 8, 9));
-    m.lanelets.back().kind = LaneletKind::kIntersection;
-    m.lanelets.back().intersection_id = 9;
+    m.lanelets.push_back(intersectionLanelet(m, 103, 8, 9));
     m.lanelets[2].successors = {103};
     writeLanelet2(m, dir.str("split.osm"));
     EXPECT_EQ(failures(dir.str("split.osm")), (Failures{{"one_lanelet_per_intersection_path", {102}}}));

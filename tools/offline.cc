@@ -13,7 +13,7 @@
 // Several drives of one area: --log A --log B ... maps them in that order into one map. Each drive
 // has its own road tracker and BEV builder; a road that an earlier drive closed gets this drive's
 // BEV aligned to the earlier evidence and merged (bev::mergeAligned: both onto the traversals' mean),
-// then is explored again (summary.json "drives": every merge and its shift). --no-align merges as
+// then is explored again (summary.json "drives": every merge, its shift and rotation). --no-align merges as
 // it comes, to show what alignment removes.
 //
 // Labels: by default every CAMERA_FRONT frame is segmented with the configured model
@@ -111,6 +111,7 @@ struct Options {
   std::string project_only;       // the one drive's traversals saved to this folder, not mapped
   std::vector<std::string> traversals;  // drives projected before (--project-only folders), mapped in this order
   bool no_align = false;          // merge later drives' BEV unaligned (to measure what alignment does)
+  bool align_rotation = false;    // search a small rotation too when aligning (bev_align.h)
   bool drive_offsets = false;     // --traversals: each drive's offset solved over the roads drives share first
   std::string offsets_out;        // --drive-offsets: write the solved offsets here and stop (a sharded fusion's first task)
   std::string offsets_in;         // --traversals: the drives' offsets from this file (--offsets-out), not solved
@@ -642,10 +643,11 @@ class OfflineMapper {
     }
     if (const auto prior = prior_.find(road.road_id); prior != prior_.end()) {  // driven in an earlier drive
       bev::BevGrid fused = prior->second;
-      const bev::Alignment a = bev::mergeAligned(it->second, fused, !o_.no_align);
+      const bev::Alignment a = bev::mergeAligned(it->second, fused, !o_.no_align, alignOptions());
       drive_log_.push_back({{"road_id", road.road_id}, {"traversals_before", traversals_[road.road_id]},
                             {"aligned", a.ok}, {"shift_m", {a.shift_m.x(), a.shift_m.y()}},
-                            {"correlation", a.correlation}, {"overlap_cells", a.overlap_cells}, {"why", a.why},
+                            {"rotation_deg", a.rotation_rad * 180.0 / M_PI}, {"correlation", a.correlation},
+                            {"overlap_cells", a.overlap_cells}, {"why", a.why},
                             {"completed_partial", completed_partial}});
       fused.save(path);
       fused_.insert(id);
@@ -656,6 +658,12 @@ class OfflineMapper {
     exploreAndSet(id, it->second, std::nullopt);
     drive_grids_.erase(it);  // this drive's evidence is the file's
     drive_saved_.insert(id);
+  }
+
+  bev::AlignOptions alignOptions() const {
+    bev::AlignOptions a;
+    if (o_.align_rotation) a.max_rotation_deg = bev::AlignOptions::kRotationSearchDeg;
+    return a;
   }
 
   // After the log: the road the car is on (opened, never closed) explored as far as the last pose.
@@ -686,9 +694,10 @@ class OfflineMapper {
     const double station = mapping::roadStation(*r, last_position, explorer_);
     auto [it, fresh] = partial_.try_emplace(r->id, Partial{open.grid, station, 1});
     if (!fresh) {  // another drive ended on it too
-      const bev::Alignment a = bev::mergeAligned(open.grid, it->second.grid, !o_.no_align);
+      const bev::Alignment a = bev::mergeAligned(open.grid, it->second.grid, !o_.no_align, alignOptions());
       drive_log_.push_back({{"road_id", r->id}, {"traversals_before", it->second.traversals}, {"aligned", a.ok},
-                            {"shift_m", {a.shift_m.x(), a.shift_m.y()}}, {"correlation", a.correlation},
+                            {"shift_m", {a.shift_m.x(), a.shift_m.y()}}, {"rotation_deg", a.rotation_rad * 180.0 / M_PI},
+                            {"correlation", a.correlation},
                             {"overlap_cells", a.overlap_cells}, {"why", a.why}, {"partial", true}});
       it->second.station_m = std::max(it->second.station_m, station);
       ++it->second.traversals;
@@ -849,6 +858,10 @@ int main(int argc, char** argv) {
                  "project the one --log drive and save what it hands over per road into this folder (grids and "
                  "projection.json), without mapping (lanemap-city's first stage; --out gets nothing)")->needs(logs)->excludes(traversals);
   app.add_flag("--no-align", o.no_align, "merge later drives' BEV as it comes, unaligned (shows the blur alignment removes)");
+  app.add_flag("--align-rotation", o.align_rotation,
+               "align later drives' BEV by a shift and a small rotation (up to 0.5 degrees; core/bev/bev_align.h), "
+               "not by a shift only")
+      ->excludes("--no-align");
   app.add_flag("--drive-offsets", o.drive_offsets,
                "--traversals: first solve each drive's own pose offset over the roads drives share and undo it in all "
                "its roads, those driven once too (core/bev/drive_offsets.h)")->needs(traversals)->excludes("--no-align");

@@ -120,12 +120,53 @@ Alignment estimateShift(const BevGrid& reference, const BevGrid& traversal, cons
     return a;
   }
   a.ok = true;
+  // The pivot: the middle of the cells both grids observed, so that the shift stays the offset
+  // where the evidence is (drive_offsets.h reads it so) whatever the rotation.
+  const cv::Moments mo = cv::moments(both, true);
+  const cv::Point pivot(static_cast<int>(std::lround(mo.m10 / mo.m00)), static_cast<int>(std::lround(mo.m01 / mo.m00)));
+  a.pivot_cell = box.min() + Eigen::Vector2i(pivot.x, pivot.y);
+  if (o.max_rotation_deg > 0.0 && o.rotation_step_deg > 0.0) {
+    // The template turned about the pivot, matched within rotation_shift_cells of the shift.
+    const int k = std::max(0, o.rotation_shift_cells);
+    const int x_lo = std::max(0, at.x - k), x_hi = std::min(2 * radius, at.x + k);
+    const int y_lo = std::max(0, at.y - k), y_hi = std::min(2 * radius, at.y + k);
+    const cv::Mat window = search(cv::Rect(x_lo, y_lo, templ.cols + x_hi - x_lo, templ.rows + y_hi - y_lo));
+    const int steps = static_cast<int>(std::floor(o.max_rotation_deg / o.rotation_step_deg + 1e-9));
+    // A rotation must beat none by min_rotation_gain: the correlation hardly changes with a turn
+    // of a tenth of a degree, which moves a line a few centimetres over a road.
+    double turned_best = best + o.min_rotation_gain;
+    cv::Mat turned, sc;
+    for (int i = -steps; i <= steps; ++i) {
+      if (i == 0) continue;
+      const double deg = i * o.rotation_step_deg, rad = deg * M_PI / 180.0;
+      // dst(q) = src(R(-rad) (q - pivot) + pivot): the content turned by +rad (x east, y north).
+      const double c = std::cos(rad), sn = std::sin(rad);
+      const cv::Matx23d m(c, sn, pivot.x - (c * pivot.x + sn * pivot.y), -sn, c, pivot.y - (-sn * pivot.x + c * pivot.y));
+      cv::warpAffine(templ, turned, m, templ.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT, 0);
+      cv::matchTemplate(window, turned, sc, cv::TM_CCORR_NORMED);
+      for (int y = 0; y < sc.rows; ++y) {
+        for (int x = 0; x < sc.cols; ++x) {
+          const double dx = (x + x_lo - radius) * res, dy = (y + y_lo - radius) * res;
+          const double v = sc.at<float>(y, x) - o.shift_prior * (dx * dx + dy * dy) - o.rotation_prior * deg * deg;
+          if (v > turned_best) {
+            turned_best = v;
+            a.correlation = v;
+            a.rotation_rad = rad;
+            a.shift_cells = Eigen::Vector2i(x + x_lo - radius, y + y_lo - radius);
+          }
+        }
+      }
+    }
+    a.shift_m = a.shift_cells.cast<double>() * res;
+  }
   return a;
 }
 
-BevGrid shiftedGrid(const BevGrid& grid, const Eigen::Vector2i& shift) {
+BevGrid shiftedGrid(const BevGrid& grid, const Eigen::Vector2i& shift) { return movedGrid(grid, CellMove{shift}); }
+
+BevGrid movedGrid(const BevGrid& grid, const CellMove& move) {
   BevGrid out(grid.options());
-  mergeGrid(grid, out, shift);
+  mergeGrid(grid, out, move);
   return out;
 }
 
@@ -143,13 +184,16 @@ Alignment mergeAligned(const BevGrid& traversal, BevGrid& fused, bool align, con
     fused.addMerge(align ? a.correlation : 0.0);  // unaligned: how well they agree is not known
     return a;
   }
-  // Both onto the frame-weighted mean: fused by -s m/(n+m), the traversal by s - s m/(n+m).
+  // Both onto the frame-weighted mean: fused by -s m/(n+m), the traversal by s - s m/(n+m); the
+  // rotation likewise, both about the alignment's pivot (for a few tenths of a degree, turning the
+  // shift too would move it under a tenth of a cell).
   const double n = std::max(1, fused.frames()), m = std::max(1, traversal.frames());
   const double w = m / (n + m);
-  const Eigen::Vector2i fused_move(static_cast<int>(std::lround(-a.shift_cells.x() * w)),
-                                   static_cast<int>(std::lround(-a.shift_cells.y() * w)));
-  const Eigen::Vector2i traversal_move = a.shift_cells + fused_move;
-  if (fused_move != Eigen::Vector2i::Zero()) fused = shiftedGrid(fused, fused_move);
+  CellMove fused_move{Eigen::Vector2i(static_cast<int>(std::lround(-a.shift_cells.x() * w)),
+                                      static_cast<int>(std::lround(-a.shift_cells.y() * w))),
+                      -a.rotation_rad * w, a.pivot_cell};
+  const CellMove traversal_move{a.shift_cells + fused_move.shift, a.rotation_rad + fused_move.rotation_rad, a.pivot_cell};
+  if (!fused_move.identity()) fused = movedGrid(fused, fused_move);
   mergeGrid(traversal, fused, traversal_move);
   fused.addMerge(a.correlation);
   return a;

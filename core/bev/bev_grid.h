@@ -51,6 +51,20 @@ struct BevGridOptions {
   int tile_cells = 128;       // tile side in cells (12.8 m at 0.1 m)
 };
 
+// A rigid move of a grid's cells: turned by rotation_rad (counter-clockwise: east towards north)
+// about the cell `pivot`, then `shift` cells away. The turn is three shears (x += a y, y += b x,
+// x += a y; a = -tan(rotation / 2), b = sin(rotation)), each rounded to whole cells, so each is a
+// one-to-one map of cells and so is the move: every source cell lands on exactly one cell, none
+// twice, and no count is lost or doubled. A cell lands within about a cell of where an exact turn
+// would put it.
+struct CellMove {
+  Eigen::Vector2i shift = Eigen::Vector2i::Zero();
+  double rotation_rad = 0.0;
+  Eigen::Vector2i pivot = Eigen::Vector2i::Zero();
+  bool identity() const { return rotation_rad == 0.0 && shift == Eigen::Vector2i::Zero(); }
+  Eigen::Vector2i apply(const Eigen::Vector2i& cell) const;
+};
+
 class BevGrid {
  public:
   using Cell = Eigen::Vector2i;  // (column east, row north): cell (i, j) covers

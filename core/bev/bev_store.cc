@@ -12,17 +12,23 @@
 
 namespace lanemap::bev {
 
-void mergeGrid(const BevGrid& src, BevGrid& dst, const Eigen::Vector2i& shift) {
+void mergeGrid(const BevGrid& src, BevGrid& dst, const CellMove& move) {
   if (src.resolution() != dst.resolution() || src.options().tile_cells != dst.options().tile_cells) {
     throw BevError("cannot merge BEV grids of different resolution or tile size");
   }
   const int t = src.options().tile_cells;
+  const size_t plane = static_cast<size_t>(t) * t;
   src.forEachTile([&](const BevGrid::Cell& origin, const uint16_t* counts) {
-    for (int l = 0; l < kNumLayers; ++l) {
-      for (int r = 0; r < t; ++r) {
-        for (int c = 0; c < t; ++c) {
-          const uint16_t n = counts[static_cast<size_t>(l) * t * t + static_cast<size_t>(r) * t + c];
-          if (n) dst.add(BevGrid::Cell(origin.x() + c + shift.x(), origin.y() + r + shift.y()), static_cast<Layer>(l), n);
+    for (int r = 0; r < t; ++r) {
+      for (int c = 0; c < t; ++c) {
+        const size_t i = static_cast<size_t>(r) * t + c;
+        bool any = false;
+        for (int l = 0; l < kNumLayers && !any; ++l) any = counts[static_cast<size_t>(l) * plane + i] != 0;
+        if (!any) continue;
+        const BevGrid::Cell to = move.apply(BevGrid::Cell(origin.x() + c, origin.y() + r));
+        for (int l = 0; l < kNumLayers; ++l) {
+          const uint16_t n = counts[static_cast<size_t>(l) * plane + i];
+          if (n) dst.add(to, static_cast<Layer>(l), n);
         }
       }
     }

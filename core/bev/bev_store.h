@@ -35,9 +35,12 @@
 
 namespace lanemap::bev {
 
-// Adds every count of `src` to `dst`, each `shift` cells away (same resolution and tile size, else
-// BevError); dst gets src's frames too.
-void mergeGrid(const BevGrid& src, BevGrid& dst, const Eigen::Vector2i& shift = Eigen::Vector2i::Zero());
+// Adds every count of `src` to `dst`, each cell moved by `move` (same resolution and tile size,
+// else BevError); dst gets src's frames too.
+void mergeGrid(const BevGrid& src, BevGrid& dst, const CellMove& move);
+inline void mergeGrid(const BevGrid& src, BevGrid& dst, const Eigen::Vector2i& shift = Eigen::Vector2i::Zero()) {
+  mergeGrid(src, dst, CellMove{shift});
+}
 
 struct StoredRoad {
   std::string path;

@@ -3,7 +3,8 @@
 # (lanemap-sim --world-seed) along the route the first one planned, each with its own seed and so
 # its own constant pose offset (config/sim_drive.yaml campaign_offset_sigma_m); each mapped alone,
 # then the first k mapped into one map (lanemap-offline --log ... --log ...) with the BEV aligned
-# before every merge and without (--no-align). Every map is scored with lanemap-eval --driven
+# before every merge (by a shift), by a shift and a small rotation (--align-rotation), and not
+# aligned (--no-align). Every map is scored with lanemap-eval --driven
 # against the world's truth (the roads the first drive closed). Truth labels, flat ground: what
 # changes between the rows is the pose error and the fusion only.
 #
@@ -53,6 +54,7 @@ for k in $(seq 1 "$drives"); do
   logs+=("$out/drive$k/drive.lcmlog")
   [ "$k" -lt 2 ] && continue
   extra=""; score "fused$k" "${logs[@]}"
+  extra="--align-rotation"; score "turned$k" "${logs[@]}"
   extra="--no-align"; score "blurred$k" "${logs[@]}"
 done
 
@@ -92,8 +94,15 @@ ok = [l for l in alone if l and l["rms_m"] is not None]
 once = sum(l["rms_m"] for l in ok) / len(ok) if ok else float("nan")
 print(f"  {'mean of the drives alone':<34} centre RMS {once:.3f} m (the baseline: lanes driven once)")
 for k in range(2, n + 1):
-    f, b = row(f"fused{k}"), row(f"blurred{k}")
+    f, s, b = row(f"fused{k}"), row(f"turned{k}"), row(f"blurred{k}")
     fmt(f"first {k} fused, aligned", f, f"fused{k}")
+    fmt(f"first {k} fused, aligned with turns", s)
+    p = os.path.join(out, f"map-turned{k}", "summary.json")
+    if os.path.exists(p):
+        m = [x for d in json.load(open(p)).get("drives", []) for x in d.get("merged", []) if x.get("aligned")]
+        turned = [x["rotation_deg"] for x in m if x.get("rotation_deg")]
+        print(f"  {'':<34} {len(m)} merges aligned, {len(turned)} turned" +
+              (f" ({', '.join(f'{t:+.1f}' for t in turned)} deg)" if turned else ""))
     fmt(f"first {k} fused, not aligned", b)
     if f and f["rms_m"] is not None and once == once:
         print(f"  {'':<34} aligned RMS / once: {f['rms_m'] / once:.2f} (target for 3+ drives: <= 0.70)")

@@ -1,7 +1,7 @@
 // lanemap-city: many drives into one map store, on every core of the machine or on a Slurm cluster.
 //
 //   lanemap-city --store S --osm city.osm [--jobs N] [--oracle | --semantic-channel C | --model M]
-//                [--no-lidar] [--no-align | --no-drive-offsets] DRIVE.lcmlog...
+//                [--no-lidar] [--no-align | --no-drive-offsets] [--align-rotation] DRIVE.lcmlog...
 //   lanemap-city --store S --osm city.osm --slurm [--slurm-dry-run] [--shards N] DRIVE.lcmlog...
 //   lanemap-city --store S --osm city.osm --shards N DRIVE.lcmlog...   (the fusion in N shards of roads)
 //
@@ -77,8 +77,8 @@ struct Options {
   int shards = 0;  // > 0: the fusion in that many shards of roads, then an assembly (0: one process)
   std::string fuse_step;  // a sharded fusion's step on its own (Slurm's jobs): prepare, shard, assemble
   int shard_index = -1;   // --fuse-step shard: which (else SLURM_ARRAY_TASK_ID)
-  bool oracle = false, no_lidar = false, no_align = false, drive_offsets = false, no_drive_offsets = false, slurm = false,
-       slurm_dry_run = false;
+  bool oracle = false, no_lidar = false, no_align = false, align_rotation = false, drive_offsets = false,
+       no_drive_offsets = false, slurm = false, slurm_dry_run = false;
 };
 
 // The store's folder of projections: NNNN (whole) in the order the drives were added.
@@ -217,10 +217,14 @@ class ShardedFusion {
   fs::path dir() const { return store_ / "fusion"; }
 
   // The plan, and the drives' offsets solved over all of them (when `offsets`).
-  void prepare(const std::vector<fs::path>& all, int shards, bool offsets, bool no_align) {
+  void prepare(const std::vector<fs::path>& all, int shards, bool offsets, bool no_align, bool align_rotation) {
     fs::remove_all(dir());
     fs::create_directories(dir());
-    nlohmann::json plan = {{"shards", shards}, {"offsets", offsets}, {"no_align", no_align}, {"projections", nlohmann::json::array()}};
+    nlohmann::json plan = {{"shards", shards},
+                           {"offsets", offsets},
+                           {"no_align", no_align},
+                           {"align_rotation", align_rotation},
+                           {"projections", nlohmann::json::array()}};
     for (const auto& p : all) plan["projections"].push_back(p.string());
     lanemap::io::writeFileAtomically((dir() / "plan.json").string(), plan.dump(1) + "\n");
     if (!offsets) return;
@@ -296,6 +300,7 @@ class ShardedFusion {
     for (const auto& p : plan.at("projections")) a.insert(a.end(), {"--traversals", p.get<std::string>()});
     a.insert(a.end(), labels_.begin(), labels_.end());
     if (plan.at("no_align").get<bool>()) a.push_back("--no-align");
+    if (plan.value("align_rotation", false)) a.push_back("--align-rotation");  // (a plan of an older version has none)
     if (plan.at("offsets").get<bool>() && fs::exists(dir() / "offsets.json")) {
       a.insert(a.end(), {"--offsets-in", (dir() / "offsets.json").string()});
     }
@@ -326,6 +331,9 @@ int main(int argc, char** argv) {
   app.add_flag("--no-lidar", o.no_lidar, "project on the flat plane only");
   auto* no_align = app.add_flag("--no-align", o.no_align,
                                 "fuse later drives unaligned, each drive's offset not solved either (to see what alignment removes)");
+  app.add_flag("--align-rotation", o.align_rotation,
+               "align by a shift and a small rotation, not a shift only (lanemap-offline --align-rotation)")
+      ->excludes(no_align);
   auto* no_offsets = app.add_flag("--no-drive-offsets", o.no_drive_offsets,
                                   "fuse without solving each drive's own pose offset first: the map lanemap-offline --log A --log B ...\n"
                                   "makes, byte for byte");
@@ -375,7 +383,7 @@ int main(int argc, char** argv) {
         if (o.shards < 1) throw std::runtime_error("--fuse-step prepare: give --shards N");
         const auto all = projections(store);
         if (all.empty()) throw std::runtime_error("the store has no projected drive to fuse");
-        sharded.prepare(all, o.shards, offsets, o.no_align);
+        sharded.prepare(all, o.shards, offsets, o.no_align, o.align_rotation);
         std::printf("lanemap-city: a fusion of %zu drives in %d shards prepared in %s\n", all.size(), o.shards, sharded.dir().c_str());
       } else {
         sharded.assemble();
@@ -416,6 +424,7 @@ int main(int argc, char** argv) {
       for (const auto& p : all) a.insert(a.end(), {"--traversals", p.string()});
       a.insert(a.end(), labels.begin(), labels.end());
       if (o.no_align) a.push_back("--no-align");
+      if (o.align_rotation) a.push_back("--align-rotation");
       if (offsets) a.push_back("--drive-offsets");
       return a;
     };
@@ -442,7 +451,8 @@ int main(int argc, char** argv) {
       // plan and the drives' offsets), fuse-shards.sbatch (an array, one task per shard), then
       // fuse-assemble.sbatch, each after the one before has succeeded.
       const std::string city = join({self.string(), "--store", store.string(), "--osm", osm}) + (labels.empty() ? "" : " " + join(labels)) +
-                               (o.no_align ? " --no-align" : "") + (o.no_drive_offsets ? " --no-drive-offsets" : "");
+                               (o.no_align ? " --no-align" : "") + (o.align_rotation ? " --align-rotation" : "") +
+                               (o.no_drive_offsets ? " --no-drive-offsets" : "");
       auto script = [&](const std::string& name, const std::string& array, const std::string& command) {
         std::ofstream f(dir / (name + ".sbatch"));
         f << "#!/bin/bash\n#SBATCH --job-name=lanemap-" << name << "\n#SBATCH --output="
@@ -532,7 +542,7 @@ int main(int argc, char** argv) {
     fs::remove_all(partial);
     const auto f0 = Clock::now();
     if (o.shards > 0) {  // prepare, the shards `jobs` at a time, assemble
-      sharded.prepare(all, o.shards, offsets, o.no_align);
+      sharded.prepare(all, o.shards, offsets, o.no_align, o.align_rotation);
       const auto plan = sharded.plan();
       std::vector<double> shard_s(o.shards, 0.0);
       std::string first_error;

@@ -146,6 +146,24 @@ TEST_F(City, TheSlurmJobScriptsRunTaskByTaskGiveTheSameMap) {
   expectSequentialMap(tmp_->str("slurm/map"));
 }
 
+// --align-rotation reaches every lanemap-offline the fusion runs: the one fusion job, and the
+// sharded chain's plan (read by each step); with --no-align it is refused.
+TEST_F(City, TheRotationSearchReachesTheFusionJobs) {
+  auto r = lt::runCommand(city("turns") + " --align-rotation --slurm --slurm-dry-run " + log(1) + " " + log(2));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string fuse = readFile(tmp_->str("turns/slurm/fuse.sbatch"));
+  EXPECT_NE(fuse.find(" --align-rotation"), std::string::npos) << fuse;
+  r = lt::runCommand(city("turns-shards") + " --align-rotation --shards 2 --slurm --slurm-dry-run " + log(1) + " " + log(2));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* job : {"fuse-prepare", "fuse-shards", "fuse-assemble"}) {
+    const std::string script = readFile(tmp_->str("turns-shards/slurm/") + job + ".sbatch");
+    EXPECT_NE(script.find(" --align-rotation"), std::string::npos) << job << ": " << script;
+  }
+  r = lt::runCommand(city("turns-no") + " --align-rotation --no-align " + log(1));
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("excludes"), std::string::npos) << r.output;
+}
+
 // --shards N: each shard's roads aligned, fused and explored apart, then assembled: the map of one
 // fusion process, byte for byte (the summary's entries the same, in road order), whatever N; with
 // the drives' offsets solved too (the default), once, for every shard.

@@ -24,11 +24,12 @@
 // A small rotation can be estimated too (max_rotation_deg; off by default): a heading that drifts,
 // a position bias that wanders while the car drives the road turn the evidence as well as shift it
 // (0.3 degrees moves a line 0.16 m 30 m from the road's middle). After the shift search, the
-// traversal's line image is turned about
-// the middle of the overlap by every rotation_step_deg up to max_rotation_deg either way and
-// matched again within a few cells of that shift; a rotation wins only where it correlates better
-// than none by min_rotation_gain, after its prior (score - rotation_prior * degrees^2). The grids
-// are then turned by bev_grid.h CellMove, which keeps every count.
+// traversal's line image is turned about the middle of the cells both grids observed (the pivot,
+// so the shift is still the offset where the evidence is) by every rotation_step_deg up to
+// max_rotation_deg either way and matched again within a few cells of that shift; a rotation wins
+// only where it correlates better than none by min_rotation_gain, after its prior (score -
+// rotation_prior * degrees^2). The grids are then turned by bev_grid.h CellMove, which keeps
+// every count.
 #pragma once
 
 #include "core/bev/bev_grid.h"

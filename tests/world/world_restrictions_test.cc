@@ -89,7 +89,9 @@ TEST(WorldRestrictions, OnlyRestrictionKeepsItsTurnAlone) {
   EXPECT_EQ(world->stats().turns_restricted, 2u);
   // Every lane into the junction still continues through it.
   for (const auto& l : world->truth().lanelets) {
-    if (l.kind == map::LaneletKind::kRoad && l.to_node == 1) EXPECT_FALSE(l.successors.empty()) << l.id;
+    if (l.kind == map::LaneletKind::kRoad && l.to_node == 1) {
+      EXPECT_FALSE(l.successors.empty()) << l.id;
+    }
   }
 }
 

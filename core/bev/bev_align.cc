@@ -88,13 +88,15 @@ Alignment estimateShift(const BevGrid& reference, const BevGrid& traversal, cons
     cv::GaussianBlur(templ, templ, cv::Size(), sigma);
     cv::GaussianBlur(search, search, cv::Size(), sigma);
   }
+  // The prior on a shift of (sx, sy) cells (see shift_prior).
+  const auto shiftPrior = [&](int sx, int sy) {
+    const double dx = sx * res, dy = sy * res;
+    return o.shift_prior * (dx * dx + dy * dy);
+  };
   cv::Mat score;
   cv::matchTemplate(search, templ, score, cv::TM_CCORR_NORMED);  // (2 radius + 1)^2
   for (int y = 0; y < score.rows; ++y) {
-    for (int x = 0; x < score.cols; ++x) {
-      const double dx = (x - radius) * res, dy = (y - radius) * res;
-      score.at<float>(y, x) -= static_cast<float>(o.shift_prior * (dx * dx + dy * dy));
-    }
+    for (int x = 0; x < score.cols; ++x) score.at<float>(y, x) -= static_cast<float>(shiftPrior(x - radius, y - radius));
   }
   double best = 0;
   cv::Point at;
@@ -120,12 +122,12 @@ Alignment estimateShift(const BevGrid& reference, const BevGrid& traversal, cons
     return a;
   }
   a.ok = true;
-  // The pivot: the middle of the cells both grids observed, so that the shift stays the offset
-  // where the evidence is (drive_offsets.h reads it so) whatever the rotation.
-  const cv::Moments mo = cv::moments(both, true);
-  const cv::Point pivot(static_cast<int>(std::lround(mo.m10 / mo.m00)), static_cast<int>(std::lround(mo.m01 / mo.m00)));
-  a.pivot_cell = box.min() + Eigen::Vector2i(pivot.x, pivot.y);
   if (o.max_rotation_deg > 0.0 && o.rotation_step_deg > 0.0) {
+    // The pivot: the middle of the cells both grids observed, so that the shift stays the offset
+    // where the evidence is (drive_offsets.h reads it so) whatever the rotation.
+    const cv::Moments mo = cv::moments(both, true);
+    const cv::Point pivot(static_cast<int>(std::lround(mo.m10 / mo.m00)), static_cast<int>(std::lround(mo.m01 / mo.m00)));
+    a.pivot_cell = box.min() + Eigen::Vector2i(pivot.x, pivot.y);
     // The template turned about the pivot, matched within rotation_shift_cells of the shift.
     const int k = std::max(0, o.rotation_shift_cells);
     const int x_lo = std::max(0, at.x - k), x_hi = std::min(2 * radius, at.x + k);
@@ -146,13 +148,13 @@ Alignment estimateShift(const BevGrid& reference, const BevGrid& traversal, cons
       cv::matchTemplate(window, turned, sc, cv::TM_CCORR_NORMED);
       for (int y = 0; y < sc.rows; ++y) {
         for (int x = 0; x < sc.cols; ++x) {
-          const double dx = (x + x_lo - radius) * res, dy = (y + y_lo - radius) * res;
-          const double v = sc.at<float>(y, x) - o.shift_prior * (dx * dx + dy * dy) - o.rotation_prior * deg * deg;
+          const Eigen::Vector2i shift(x + x_lo - radius, y + y_lo - radius);
+          const double v = sc.at<float>(y, x) - shiftPrior(shift.x(), shift.y()) - o.rotation_prior * deg * deg;
           if (v > turned_best) {
             turned_best = v;
             a.correlation = v;
             a.rotation_rad = rad;
-            a.shift_cells = Eigen::Vector2i(x + x_lo - radius, y + y_lo - radius);
+            a.shift_cells = shift;
           }
         }
       }

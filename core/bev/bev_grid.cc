@@ -12,14 +12,13 @@
 
 namespace lanemap::bev {
 
-Eigen::Vector2i CellMove::apply(const Eigen::Vector2i& cell) const {
+Eigen::Vector2i CellMove::apply(const Eigen::Vector2i& cell, const Eigen::Vector2d& shears) const {
   if (rotation_rad == 0.0) return cell + shift;
-  const double a = -std::tan(rotation_rad / 2), b = std::sin(rotation_rad);
   const auto round = [](double v) { return static_cast<int>(std::lround(v)); };
   int x = cell.x() - pivot.x(), y = cell.y() - pivot.y();
-  x += round(a * y);
-  y += round(b * x);
-  x += round(a * y);
+  x += round(shears.x() * y);
+  y += round(shears.y() * x);
+  x += round(shears.x() * y);
   return Eigen::Vector2i(x + pivot.x() + shift.x(), y + pivot.y() + shift.y());
 }
 

@@ -18,6 +18,7 @@
 #include <Eigen/Geometry>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -62,7 +63,10 @@ struct CellMove {
   double rotation_rad = 0.0;
   Eigen::Vector2i pivot = Eigen::Vector2i::Zero();
   bool identity() const { return rotation_rad == 0.0 && shift == Eigen::Vector2i::Zero(); }
-  Eigen::Vector2i apply(const Eigen::Vector2i& cell) const;
+  // The turn's shear factors (a, b): worked out once by a caller that moves many cells.
+  Eigen::Vector2d shears() const { return {-std::tan(rotation_rad / 2), std::sin(rotation_rad)}; }
+  Eigen::Vector2i apply(const Eigen::Vector2i& cell, const Eigen::Vector2d& shears) const;
+  Eigen::Vector2i apply(const Eigen::Vector2i& cell) const { return apply(cell, shears()); }
 };
 
 class BevGrid {

@@ -18,6 +18,7 @@ void mergeGrid(const BevGrid& src, BevGrid& dst, const CellMove& move) {
   }
   const int t = src.options().tile_cells;
   const size_t plane = static_cast<size_t>(t) * t;
+  const Eigen::Vector2d shears = move.shears();
   src.forEachTile([&](const BevGrid::Cell& origin, const uint16_t* counts) {
     for (int r = 0; r < t; ++r) {
       for (int c = 0; c < t; ++c) {
@@ -25,7 +26,7 @@ void mergeGrid(const BevGrid& src, BevGrid& dst, const CellMove& move) {
         bool any = false;
         for (int l = 0; l < kNumLayers && !any; ++l) any = counts[static_cast<size_t>(l) * plane + i] != 0;
         if (!any) continue;
-        const BevGrid::Cell to = move.apply(BevGrid::Cell(origin.x() + c, origin.y() + r));
+        const BevGrid::Cell to = move.apply(BevGrid::Cell(origin.x() + c, origin.y() + r), shears);
         for (int l = 0; l < kNumLayers; ++l) {
           const uint16_t n = counts[static_cast<size_t>(l) * plane + i];
           if (n) dst.add(to, static_cast<Layer>(l), n);

@@ -886,7 +886,7 @@ int main(int argc, char** argv) {
       ->excludes(oracle);
   app.add_option("--segmenter-config", o.segmenter_config, "segmentation model config (its model block)")->capture_default_str();
   app.add_option("--model", o.model, "ONNX model, instead of the segmenter config's model.path");
-  app.add_flag("--no-lidar", o.no_lidar, "project on the flat plane only");
+  app.add_flag("--no-lidar", o.no_lidar, "no LIDAR mesh: project on the flat plane under the car (or the road's crown, with the BEV config's projection.crown_slope > 0)");
   app.add_flag("--mesh-in-main-thread", o.mesh_in_main_thread,
                "build the LIDAR meshes in the main thread (one core; the same map, slower)");
   app.add_option("--autoware", o.autoware,

@@ -52,6 +52,10 @@ BevBuilderOptions BevBuilderOptions::fromYaml(const config::YamlReader& n) {
   p.read("lane_separation", o.projector.lane_separation);
   p.read("max_separation_gap_m", o.projector.max_separation_gap_m);
   p.read("mesh_raster", o.projector.mesh_raster);
+  p.read("crown_slope", o.crown.slope);
+  p.read("crown_fade_m", o.crown.fade_m);
+  if (!(o.crown.slope >= 0.0 && o.crown.slope <= 0.1)) p.fail("crown_slope", "must be in [0, 0.1] (a cross-slope, rise over run)");
+  if (!(o.crown.fade_m >= 0.0)) p.fail("crown_fade_m", "must be >= 0");
   const auto corridor = n.section("corridor");
   corridor.read("half_width_m", o.accumulator.corridor.half_width_m);
   corridor.read("mask_cell_m", o.accumulator.corridor.mask_cell_m);
@@ -328,7 +332,9 @@ void BevBuilder::project(int64_t utime, const cv::Mat& labels, const Eigen::Isom
     // The projection reads only the frame, the pose and the mesh (held here): the worker may take
     // the lock meanwhile.
     const Unlocked unlocked(mutex_);
-    splat = projector_.project(labels, pose, use_mesh ? mesh->mesh.get() : nullptr);
+    std::optional<RoadCrown> crown;
+    if (!use_mesh) crown = RoadCrown::around(skeleton_, pose, options_.crown);
+    splat = projector_.project(labels, pose, use_mesh ? mesh->mesh.get() : nullptr, crown ? &*crown : nullptr);
   }
   splat.utime = utime;
   accumulator_.add(splat);

@@ -75,6 +75,9 @@ struct BevBuilderOptions {
   AccumulatorOptions accumulator;
   ground::SweepGroundOptions ground;
   bool use_lidar = true;           // false: flat ground only
+  // crown.slope > 0: a frame with no mesh is projected on the crown of the road the car drives
+  // (road_crown.h); 0 (the default): on the flat plane under the car.
+  CrownOptions crown;
   bool async_mesh = true;          // build meshes in a worker thread
   // With async_mesh, for a reader that can wait (lanemap-offline): true: when kMaxQueuedSweeps
   // sweeps already wait for the worker the caller waits too, instead of dropping the oldest

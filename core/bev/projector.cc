@@ -422,7 +422,7 @@ void Projector::separationPixels(const cv::Mat& labels, const Row& r, std::vecto
 }
 
 FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& vehicle_to_enu,
-                              const ground::MeshGround* mesh) const {
+                              const ground::MeshGround* mesh, const RoadCrown* crown) const {
   FrameSplat splat;
   splat.resolution = options_.resolution_m;
   const cv::Mat lab = labels.isContinuous() ? labels : labels.clone();
@@ -451,6 +451,7 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
   const auto flatPoint = [&](const Ray& ray) -> Eigen::Vector2d {
     return (vehicle_to_enu * ray.flat_hit.cast<double>()).head<2>();
   };
+  size_t crown_hint = 0;  // RoadCrown::hit's segment, carried from pixel to pixel
   for (const auto& [i, bits] : px) {
     const Ray& ray = rays_[i];
     Eigen::Vector2d p;  // the pixel's ground point (ENU x, y)
@@ -510,6 +511,19 @@ FrameSplat Projector::project(const cv::Mat& labels, const Eigen::Isometry3d& ve
           ++splat.dropped;
           continue;
         }
+        ++splat.flat;
+      }
+    } else if (crown) {
+      const Eigen::Vector3d d = rot * ray.dir.cast<double>();
+      const double dxy = std::max(std::hypot(d.x(), d.y()), 1e-9);
+      const double t_flat = (ray.flat_hit - centre_).norm();
+      // The crowned ground lies below the plane beyond the crown: its hit may be a little farther
+      // than the flat one (the raster below drops what leaves it).
+      if (const auto h = crown->hit(c, d, t_flat, 1.5 * options_.max_range_m / dxy, crown_hint)) {
+        p = *h;
+        ++splat.crowned;
+      } else {
+        p = flatPoint(ray);
         ++splat.flat;
       }
     } else {

@@ -51,6 +51,7 @@
 #pragma once
 
 #include "core/bev/bev_grid.h"
+#include "core/bev/road_crown.h"
 #include "core/camera/camera_model.h"
 #include "core/ground/ground_mesh.h"
 
@@ -93,6 +94,7 @@ struct FrameSplat {
   size_t pixels = 0;          // projected (lattice + separation pixels)
   size_t mesh_hits = 0;       // placed on the mesh
   size_t flat = 0;            // placed on the flat plane (flat model, or no mesh triangle there)
+  size_t crowned = 0;         // placed on the road's crown (no mesh; road_crown.h)
   size_t dropped = 0;         // ray missed a mesh lying under it
   size_t raycast = 0;         // mesh pixels the raster did not settle, ray-cast into the index
 };
@@ -111,9 +113,10 @@ class Projector {
   LabelCheck check(const cv::Mat& labels) const;
 
   // Projects a checked label image taken at vehicle pose vehicle_to_enu. mesh == nullptr: the flat
-  // plane under the vehicle.
+  // plane under the vehicle, or with a crown (RoadCrown::around the same pose) the road's crowned
+  // surface (a pixel whose ray the crown does not settle keeps its flat hit). A mesh wins over a crown.
   FrameSplat project(const cv::Mat& labels, const Eigen::Isometry3d& vehicle_to_enu,
-                     const ground::MeshGround* mesh = nullptr) const;
+                     const ground::MeshGround* mesh = nullptr, const RoadCrown* crown = nullptr) const;
 
   const ProjectorOptions& options() const { return options_; }
   const camera::CameraModel& camera() const { return camera_; }

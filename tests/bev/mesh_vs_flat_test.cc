@@ -4,7 +4,8 @@
 // just before the frame (ground extraction + triangulation of core/ground), both with the true pose.
 // Scored against the world's truth: how far the projected lane-line cells are from the true line
 // strings, and how many projected line / crosswalk cells lie on that paint in the world. Prints
-// both; the mesh must win.
+// both; the mesh must win. A third projection without the LIDAR, on the driven road's crown
+// (core/bev/road_crown.h), must beat the flat plane and lose to the mesh.
 #include "core/bev/projector.h"
 #include "core/camera/camera_model.h"
 #include "core/ground/sweep_ground.h"
@@ -104,7 +105,9 @@ TEST(MeshVsFlat, TheLidarMeshPutsLinesAndCrosswalksCloserToTheTruthOnHillyCrowne
   const bev::Projector projector(camera);
   auto poseAt = [&](double t) { return traj.at(t).vehicle_to_enu; };
 
-  Score flat, mesh;
+  Score flat, mesh, crowned;
+  bev::CrownOptions crown_options;
+  crown_options.slope = 0.02;
   int frames = 0;
   for (double t = 3.0; t < traj.duration() - 1.0; t += 4.0) {
     const sim::VehicleState st = traj.at(t);
@@ -122,6 +125,9 @@ TEST(MeshVsFlat, TheLidarMeshPutsLinesAndCrosswalksCloserToTheTruthOnHillyCrowne
     EXPECT_GT(m.mesh_hits, m.pixels / 2) << "t " << t;
     score(f, *world, lines, flat);
     score(m, *world, lines, mesh);
+    // Without the LIDAR: the driven road's crown (core/bev/road_crown.h; 2 %, as the simulator's).
+    const auto crown = bev::RoadCrown::around(sk, st.vehicle_to_enu, crown_options);
+    score(projector.project(frame.labels, st.vehicle_to_enu, nullptr, crown ? &*crown : nullptr), *world, lines, crowned);
     ++frames;
   }
   std::printf("%d frames; lane-line cells: flat %zu cells, mean distance to the true lines %.3f m, on paint %.1f %%;"
@@ -130,7 +136,13 @@ TEST(MeshVsFlat, TheLidarMeshPutsLinesAndCrosswalksCloserToTheTruthOnHillyCrowne
               mesh.meanDistance(), 100 * mesh.linePrecision());
   std::printf("crosswalk cells: flat %zu, on crosswalk paint %.1f %%; mesh %zu, %.1f %%\n", flat.crosswalk_cells,
               100 * flat.crosswalkPrecision(), mesh.crosswalk_cells, 100 * mesh.crosswalkPrecision());
+  std::printf("crowned (no LIDAR): lane-line cells %zu, mean distance %.3f m, on paint %.1f %%\n", crowned.line_cells,
+              crowned.meanDistance(), 100 * crowned.linePrecision());
   ASSERT_GT(frames, 10);
+  // The crown model is closer than the flat plane, and the measured ground closer still.
+  EXPECT_LT(crowned.meanDistance(), 0.95 * flat.meanDistance());
+  EXPECT_GT(crowned.linePrecision(), flat.linePrecision());
+  EXPECT_LT(mesh.meanDistance(), crowned.meanDistance());
   ASSERT_GT(flat.line_cells, 2000u);
   EXPECT_LT(mesh.meanDistance(), 0.8 * flat.meanDistance()) << "the mesh must be measurably closer";
   EXPECT_GT(mesh.linePrecision(), flat.linePrecision());

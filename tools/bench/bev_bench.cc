@@ -109,9 +109,9 @@ void benchFrames(int frames) {
   auto poseAt = [&](double t) { return traj.at(t).vehicle_to_enu; };
   std::printf("camera %dx%d: %zu candidate pixels within 30 m, %zu on the projection lattice\n", cam.width(),
               cam.height(), projector.candidatePixels(), projector.latticePixels());
-  double t_flat = 0, t_mesh = 0, t_mesh_full = 0, t_cast = 0, t_warp = 0, t_dec = 0, t_ext = 0, t_tri = 0, t_idx = 0,
+  double t_flat = 0, t_crown = 0, t_mesh = 0, t_mesh_full = 0, t_cast = 0, t_warp = 0, t_dec = 0, t_ext = 0, t_tri = 0, t_idx = 0,
          t_ground = 0, t_ground_full = 0;
-  size_t points = 0, ground = 0, mesh_points = 0, tris = 0, tris_full = 0, cells_flat = 0, cells_mesh = 0,
+  size_t points = 0, ground = 0, mesh_points = 0, tris = 0, tris_full = 0, cells_flat = 0, cells_crown = 0, cells_mesh = 0,
          cells_mesh_full = 0, cells_cast = 0, cells_differ = 0;
   ground::SweepGroundOptions full_options;  // every ground point a vertex (before decimation)
   full_options.decimate_m = 0.0;
@@ -142,6 +142,15 @@ void benchFrames(int frames) {
     c0 = cpuMs();
     cells_flat += projector.project(labels, st.vehicle_to_enu).cells.size();
     t_flat += cpuMs() - c0;
+    c0 = cpuMs();
+    {
+      // No LIDAR, crown_slope 0.02: the driven road's crown (lanemap-bev-builder then), its set-up included.
+      bev::CrownOptions crown_options;
+      crown_options.slope = 0.02;
+      const auto crown = bev::RoadCrown::around(*s.sk, st.vehicle_to_enu, crown_options);
+      cells_crown += projector.project(labels, st.vehicle_to_enu, nullptr, crown ? &*crown : nullptr).cells.size();
+    }
+    t_crown += cpuMs() - c0;
     c0 = cpuMs();
     const auto m = projector.project(labels, st.vehicle_to_enu, g.mesh.get());
     t_mesh += cpuMs() - c0;
@@ -181,6 +190,8 @@ void benchFrames(int frames) {
   std::printf("per frame (%d frames, %dx%d labels, CPU ms of 1 thread):\n", n, cam.width(), cam.height());
   std::printf("  flat projection   %7.2f ms  (%zu cells)   %5.1fx warpPerspective   [baseline of the mesh rows]\n",
               t_flat / n, cells_flat / n, t_flat / t_warp);
+  std::printf("  crowned road      %7.2f ms  (%zu cells)   %5.1fx warpPerspective, %.2fx flat  [no LIDAR: the road's"
+              " 2 %% crown, core/bev/road_crown.h; off by default]\n", t_crown / n, cells_crown / n, t_crown / t_warp, t_crown / t_flat);
   std::printf("  mesh projection   %7.2f ms  (%zu cells)   %5.1fx warpPerspective, %.2fx flat (target <= 2x)"
               "  [raster, decimated mesh: the default]\n",
               t_mesh / n, cells_mesh / n, t_mesh / t_warp, t_mesh / t_flat);

@@ -18,6 +18,8 @@
 #   LIDAR=1           BEV on the LIDAR ground mesh (0: --no-lidar, flat plane; faster)
 #   JOBS=$(nproc)     drives simulated and mapped at once
 #   REPROJECT=1       project the drives again (after a change to segmentation, BEV or road tracking)
+#   BEV_CONFIG=FILE   project with this BEV builder config (lanemap-offline --bev-config; e.g. one with
+#                     projection.crown_slope 0.02): use a fresh OUT_DIR or REPROJECT=1
 #   TRAINED_ON=monaco the networks the segmentation model was trained on (comma-separated; the
 #                     shipped model: Monaco, models/README.md): the model's rows are also pooled
 #                     over those and over the networks it never saw
@@ -52,6 +54,10 @@ fi
 sim_flags=()
 map_flags=()
 if [ "$lidar" = 0 ]; then sim_flags+=(--no-lidar); map_flags+=(--no-lidar); fi
+if [ -n "${BEV_CONFIG:-}" ]; then
+  [ -f "$BEV_CONFIG" ] || { echo "quality.sh: no such BEV builder config: $BEV_CONFIG" >&2; exit 2; }
+  map_flags+=(--bev-config "$(cd "$(dirname "$BEV_CONFIG")" && pwd)/$(basename "$BEV_CONFIG")")
+fi
 if [ -n "${LANES_CONFIG:-}" ]; then
   [ -n "$tag" ] || { echo "quality.sh: LANES_CONFIG needs TAG (the maps it makes are named by it)" >&2; exit 2; }
   [ -f "$LANES_CONFIG" ] || { echo "quality.sh: no such lane mapper config: $LANES_CONFIG" >&2; exit 2; }

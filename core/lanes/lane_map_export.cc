@@ -240,7 +240,12 @@ map::LaneMap toLaneMap(const ExplorationResult& r, double lat, double lon, doubl
       ll.right_id = shared_right >= 0 ? shared_right : right.id;
       for (double s : ss) {
         const double dl = boundAt(static_cast<int>(i), false, s), dr = boundAt(static_cast<int>(i), true, s);
-        const Eigen::Vector2d pl = r.frame->toEnu(s, dl), pr = r.frame->toEnu(s, dr), pc = r.frame->toEnu(s, l.centre.d(s));
+        // The centre line comes from the particles, the bounds from the probes: where a bound was
+        // drawn in past the centre (at most recentre_max_m recentres it), the centre is kept on the
+        // lanelet's edge (within kCentreSlackM) so that it never leaves its lanelet.
+        constexpr double kCentreSlackM = 0.05;
+        const double dc = std::clamp(l.centre.d(s), std::min(dl, dr) - kCentreSlackM, std::max(dl, dr) + kCentreSlackM);
+        const Eigen::Vector2d pl = r.frame->toEnu(s, dl), pr = r.frame->toEnu(s, dr), pc = r.frame->toEnu(s, dc);
         left.points.emplace_back(pl.x(), pl.y(), 0.0);
         right.points.emplace_back(pr.x(), pr.y(), 0.0);
         ll.centre.emplace_back(pc.x(), pc.y(), 0.0);

@@ -46,8 +46,7 @@ std::optional<RoadCrown> RoadCrown::around(const skeleton::Skeleton& skeleton, c
   c.plane_z0_ = vehicle_to_enu.translation().z();
   c.plane_g_ = Eigen::Vector2d(-up.x() / up.z(), -up.y() / up.z());
   size_t hint = static_cast<size_t>(std::max(0.0, std::min(options.behind_m, static_cast<double>(n - 2))));
-  const Eigen::Vector2d sd = c.frenet(car, hint);
-  c.car_profile_ = c.profile(sd.x(), sd.y());
+  c.frenet(car, hint);  // the hint at the car
   // The car rests on its four wheels (origin: the rear axle's middle): its plane rises, relative to
   // the profile at the origin, as the profile does from its rear wheels to its front ones and from
   // its right wheels to its left ones, whichever way it faces the road (a U-turn's car faces across

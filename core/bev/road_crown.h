@@ -3,13 +3,13 @@
 //
 // Roads are built with a cross-slope so that rain runs off: from the crown (a two-way road's centre
 // line, a one-way carriageway's middle: where OSM draws the way) down to the kerbs, typically
-// 1.5-2.5 % (AASHTO: 1.5-2 % for paved lanes; 2-2.5 % in many European standards). The car rests on
+// 1.5-2.5 % (AASHTO's 1.5-2 % for paved lanes; about 2.5 % in several European guidelines). The car rests on
 // that slope, so the plane under it (z = 0 of the vehicle frame, tilted by the pose's roll) is the
 // ground on its own side of the crown; across the crown the ground falls away from that plane, 2 k
 // per metre beyond it. A pixel whose ray reaches that ground meets the plane short of it, so the
 // lanes beyond the crown come out pulled towards the car, more the farther they are: on the broad
-// benchmark's simulated drives (whose roads have a 2 % crown) by 0.12 m a lane over and 0.4-0.6 m
-// two lanes over, on the truth labels (README, "The road's crown").
+// benchmark's simulated drives (whose roads have a 2 % crown), truth labels, by 0.12 m a lane over
+// and 0.36 m two lanes over (0.48 m on the shipped model's labels; README, "The road's crown").
 //
 // RoadCrown models the ground around the car as the road's profile z = -k |d| f(s) about its OSM
 // line (d: the offset to the left of the line, s: along it), the crown fading out over fade_m
@@ -19,8 +19,8 @@
 // car's plane (the pose's), the ground at a point is the profile there less the plane the car rests
 // on: the plane through the profile under its four wheels (track_m and wheelbase_m apart), whichever
 // way the car faces. So with the car on one side of the crown and the road straight, the ground on
-// that side is the plane exactly, as before. A pixel's ground point is where its ray meets that surface (a few secant steps
-// from the flat hit); where they do not converge the pixel keeps its flat hit.
+// that side is the plane exactly, as before. A pixel's ground point is where its ray meets that
+// surface (a few secant steps from the flat hit); where they do not settle it keeps its flat hit.
 //
 // What it does not know: a road's real cross-slope (superelevated bends, one-way carriageways that
 // fall to one side), a crown off the OSM line, kerbs and sidewalks. The LIDAR mesh measures the
@@ -80,7 +80,7 @@ class RoadCrown {
   std::vector<Eigen::Vector2d> pts_;    // the line around the car, about 1 m apart
   std::vector<double> s_;               // arc length of each point along the road
   std::vector<Eigen::Vector2d> tangent_;  // per segment, unit
-  // The car: its plane (ENU z = plane_z0_ + plane_g_ . (p - car_)), its profile and slope across.
+  // The car and its plane from the pose: ENU z = plane_z0_ + plane_g_ . (p - car_).
   Eigen::Vector2d car_ = Eigen::Vector2d::Zero();
   double plane_z0_ = 0.0;
   Eigen::Vector2d plane_g_ = Eigen::Vector2d::Zero();

@@ -51,17 +51,19 @@ if [ -z "${NETWORKS:-}" ]; then
   NETWORKS="west-oakland.osm monaco.osm.pbf $(cd "$root/data/osm" && ls dev/*.osm | tr '\n' ' ')"
   NETWORKS+=" lanelet2:karlsruhe_mapping_example.osm"
 fi
+# A file's absolute path (the drives run in sub-shells elsewhere).
+abspath() { echo "$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"; }
 sim_flags=()
 map_flags=()
 if [ "$lidar" = 0 ]; then sim_flags+=(--no-lidar); map_flags+=(--no-lidar); fi
 if [ -n "${BEV_CONFIG:-}" ]; then
   [ -f "$BEV_CONFIG" ] || { echo "quality.sh: no such BEV builder config: $BEV_CONFIG" >&2; exit 2; }
-  map_flags+=(--bev-config "$(cd "$(dirname "$BEV_CONFIG")" && pwd)/$(basename "$BEV_CONFIG")")
+  map_flags+=(--bev-config "$(abspath "$BEV_CONFIG")")
 fi
 if [ -n "${LANES_CONFIG:-}" ]; then
   [ -n "$tag" ] || { echo "quality.sh: LANES_CONFIG needs TAG (the maps it makes are named by it)" >&2; exit 2; }
   [ -f "$LANES_CONFIG" ] || { echo "quality.sh: no such lane mapper config: $LANES_CONFIG" >&2; exit 2; }
-  LANES_CONFIG=$(cd "$(dirname "$LANES_CONFIG")" && pwd)/$(basename "$LANES_CONFIG")
+  LANES_CONFIG=$(abspath "$LANES_CONFIG")
 fi
 
 # One drive: simulate (unless already there), map on each label source, score.

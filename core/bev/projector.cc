@@ -189,6 +189,27 @@ namespace {
 
 constexpr float kEdge = 1e-6f;  // barycentric tolerance at triangle edges (relative)
 
+// The z-buffer pass of one triangle over compact pixels [first, last) of a row: each pixel the
+// triangle covers (barycentric weights a, b, g >= -kEdge (a + b + g)) and that it is nearer at than
+// the nearest so far (inverse depth a + b + g above z) takes it. Branch-free, so it vectorises.
+void rasterSpan(const std::array<Eigen::Vector3f, 3>& l, int32_t vi, const float* __restrict qxs,
+                const float* __restrict qys, int first, int last, float* __restrict z, int32_t* __restrict owner) {
+  const float l0x = l[0].x(), l0y = l[0].y(), l0z = l[0].z();
+  const float l1x = l[1].x(), l1y = l[1].y(), l1z = l[1].z();
+  const float l2x = l[2].x(), l2y = l[2].y(), l2z = l[2].z();
+  for (int ci = first; ci < last; ++ci) {
+    const float qx = qxs[ci], qy = qys[ci];
+    const float a = l0x * qx + l0y * qy + l0z;
+    const float b = l1x * qx + l1y * qy + l1z;
+    const float g = l2x * qx + l2y * qy + l2z;
+    const float s = a + b + g;
+    const float tol = -kEdge * s;
+    const bool take = (s > z[ci]) & !(a < tol) & !(b < tol) & !(g < tol);
+    z[ci] = take ? s : z[ci];
+    owner[ci] = take ? vi : owner[ci];
+  }
+}
+
 // 1 / camera depth of the hit of ray (qx, qy, 1) on a triangle (ViewTriangle::l), 0 when it misses.
 inline float rayWeight(const std::array<Eigen::Vector3f, 3>& l, float qx, float qy) {
   const float a = l[0].x() * qx + l[0].y() * qy + l[0].z();
@@ -359,27 +380,19 @@ void Projector::rasterise(const ground::MeshGround& mesh, const Eigen::Isometry3
         xa = std::max(x0, xa - 1e-5f);
         xb = std::min(x1, xb + 1e-5f);
       }
-      // Lookup-table bin of xa (truncation is floor here: negative values clamp to bin 0).
-      const float kf = (xa - row.qx_lo) * row.lut_inv_step;
-      const int k = kf <= 0.0f ? 0 : static_cast<int>(std::min(kf, static_cast<float>(row.lut_n - 1)));
+      // The row's pixels [first, last): from xa's lookup-table bin (truncation is floor here: negative
+      // values clamp to bin 0) up to the last with qx <= xb, found from xb's bin on.
+      const auto bin = [&](float x) {
+        const float kf = (x - row.qx_lo) * row.lut_inv_step;
+        return kf <= 0.0f ? 0 : static_cast<int>(std::min(kf, static_cast<float>(row.lut_n - 1)));
+      };
       const int end = row.offset + row.n;
-      const float* qxs = rqx_.data();
-      const float* qys = rqy_.data();
-      float* z = zw.data();
-      int32_t* owner = out.tri.data();
-      for (int ci = row.offset + lut_[row.lut_begin + k]; ci < end; ++ci) {
-        const float qx = qxs[ci];
-        if (qx > xb) break;
-        const float qy = qys[ci];
-        const float a = l[0].x() * qx + l[0].y() * qy + l[0].z();
-        const float b = l[1].x() * qx + l[1].y() * qy + l[1].z();
-        const float g = l[2].x() * qx + l[2].y() * qy + l[2].z();
-        const float s = a + b + g;
-        const float tol = -kEdge * s;
-        if (!(s > z[ci]) || a < tol || b < tol || g < tol) continue;
-        z[ci] = s;
-        owner[ci] = vi;
-      }
+      const float* __restrict qxs = rqx_.data();
+      const float* __restrict qys = rqy_.data();
+      const int first = row.offset + lut_[row.lut_begin + bin(xa)];
+      int last = std::max(first, row.offset + lut_[row.lut_begin + bin(xb)]);
+      while (last < end && qxs[last] <= xb) ++last;
+      rasterSpan(l, vi, qxs, qys, first, last, zw.data(), out.tri.data());
     }
   }
 }

@@ -46,8 +46,8 @@
 //   the nearer of its two lattice neighbours' triangles that its own ray meets, and is ray-cast
 //   when neither does. So the cells are those of the ray cast up to float rounding at triangle
 //   edges (tests/bev/mesh_raster_test.cc: 0 to 0.007 % of the cells differ). mesh_raster = false
-//   casts every ray (the reference). lanemap-bench-bev: 24x the flat projection before, 2.0x now
-//   with the decimated mesh (core/ground/sweep_ground.h), 2.7x on the full mesh.
+//   casts every ray (the reference). lanemap-bench-bev: 24x the flat projection before, 1.95-2.0x
+//   now with the decimated mesh (core/ground/sweep_ground.h), 2.7x on the full mesh.
 #pragma once
 
 #include "core/bev/bev_grid.h"

@@ -134,6 +134,8 @@ size_t BevGrid::memoryBytes() const {
 
 void BevGrid::save(const std::string& path) const {
   std::string out;
+  const size_t tile_bytes = static_cast<size_t>(kNumLayers) * options_.tile_cells * options_.tile_cells * sizeof(uint16_t);
+  out.reserve(sizeof(kMagic) + 64 + tiles_.size() * (sizeof(int64_t) + tile_bytes));  // one allocation: grids run to megabytes
   out.append(kMagic, sizeof(kMagic));
   put<double>(out, options_.resolution_m);
   put<int32_t>(out, options_.tile_cells);

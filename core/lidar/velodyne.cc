@@ -64,6 +64,9 @@ std::vector<LaserGeometry> buildTable(const double* elevation, const double* azi
     table[i].elevation_deg = elevation[i];
     table[i].azimuth_offset_deg = azimuth_offset ? azimuth_offset[i] : 0.0;
     table[i].firing_offset_us = (i / timing.lasers_per_group) * timing.group_us;
+    const double el = elevation[i] * kDegToRad;
+    table[i].cos_elevation = std::cos(el);
+    table[i].sin_elevation = std::sin(el);
   }
   // ring = rank by elevation (ties, none in these tables, by laser id)
   std::vector<int> order(n);
@@ -278,13 +281,12 @@ double blockGapDeg(const Header& h, int b, int stride) {
 }
 
 LidarPoint makePoint(double distance_m, double azimuth_deg, const LaserGeometry& g) {
-  const double el = g.elevation_deg * kDegToRad;
   const double az = azimuth_deg * kDegToRad;
-  const double horizontal = distance_m * std::cos(el);
+  const double horizontal = distance_m * g.cos_elevation;
   LidarPoint p;
   p.x = static_cast<float>(horizontal * std::cos(az));
   p.y = static_cast<float>(-horizontal * std::sin(az));
-  p.z = static_cast<float>(distance_m * std::sin(el));
+  p.z = static_cast<float>(distance_m * g.sin_elevation);
   p.azimuth_deg = static_cast<float>(azimuth_deg);
   p.ring = static_cast<uint8_t>(g.ring);
   return p;

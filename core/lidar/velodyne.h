@@ -99,6 +99,7 @@ struct LaserGeometry {
   double azimuth_offset_deg = 0.0;   // added to the firing azimuth (VLP-32C only)
   double firing_offset_us = 0.0;     // time after the start of its firing sequence
   int ring = 0;                      // index sorted by elevation, 0 = lowest
+  double cos_elevation = 1.0, sin_elevation = 0.0;  // of elevation_deg, computed once per laser
 };
 
 int laserCount(Model model);                          // 16 or 32

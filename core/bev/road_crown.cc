@@ -47,6 +47,7 @@ std::optional<RoadCrown> RoadCrown::around(const skeleton::Skeleton& skeleton, c
   c.plane_g_ = Eigen::Vector2d(-up.x() / up.z(), -up.y() / up.z());
   size_t hint = static_cast<size_t>(std::max(0.0, std::min(options.behind_m, static_cast<double>(n - 2))));
   c.frenet(car, hint);  // the hint at the car
+  c.car_segment_ = hint;
   // The car rests on its four wheels (origin: the rear axle's middle): its plane rises, relative to
   // the profile at the origin, as the profile does from its rear wheels to its front ones and from
   // its right wheels to its left ones, whichever way it faces the road (a U-turn's car faces across
@@ -102,7 +103,7 @@ double RoadCrown::aboveCarPlane(const Eigen::Vector2d& p, size_t& hint) const {
 }
 
 double RoadCrown::groundZ(const Eigen::Vector2d& p) const {
-  size_t hint = static_cast<size_t>(std::min(o_.behind_m, static_cast<double>(tangent_.size() - 1)));
+  size_t hint = car_segment_;
   return planeZ(p) + aboveCarPlane(p, hint);
 }
 

@@ -80,6 +80,7 @@ class RoadCrown {
   std::vector<Eigen::Vector2d> pts_;    // the line around the car, about 1 m apart
   std::vector<double> s_;               // arc length of each point along the road
   std::vector<Eigen::Vector2d> tangent_;  // per segment, unit
+  size_t car_segment_ = 0;              // the segment the car is on (frenet's hint there)
   // The car and its plane from the pose: ENU z = plane_z0_ + plane_g_ . (p - car_).
   Eigen::Vector2d car_ = Eigen::Vector2d::Zero();
   double plane_z0_ = 0.0;
